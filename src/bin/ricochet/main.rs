@@ -1,0 +1,35 @@
+//! The `ricochet` command-line program.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod impact;
+
+/// Planar multibody simulator with event-driven rigid impacts.
+#[derive(Parser)]
+#[command(name = "ricochet", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Solve one-point impact problems read as JSON Lines from standard input.
+    Impact(impact::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Impact(args) => impact::run(args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
