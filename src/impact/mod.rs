@@ -1,10 +1,39 @@
 //! The one-point planar impact laws with Coulomb friction of [P], as pure functions of
 //! `(W, v^A, e, μ)`. Nothing here knows about bodies.
+//!
+//! ```
+//! use ricochet::impact::{self, ContactVelocity, ImpactMatrix, ImpactProblem, Law};
+//!
+//! // The double pendulum of [P, Sect. 5], Table 2 row 1 (e = 0.5, μ = 0.2).
+//! let w = ImpactMatrix::new(0.33652, -0.50710, 0.81345);
+//! let pb = ImpactProblem::new(w, ContactVelocity::new(-0.26840, 0.53435), 0.5, 0.2);
+//! let out = impact::solve(Law::Newton, &pb)?;
+//! assert_eq!(out.kind.name(), "reverse_sliding");
+//! assert_eq!(out.case.number(), 3);
+//! assert!((out.v_s.t - -0.078).abs() < 5e-4);
+//! # Ok::<(), impact::ImpactError>(())
+//! ```
+
+mod coefficients;
+pub mod kane_levinson;
+pub mod newton;
+mod outcome;
+mod path;
+mod poisson;
+mod problem;
+mod stronge;
+
+pub use coefficients::{Coefficients, SignCase};
+pub use outcome::{CollisionType, Outcome, energy_change};
+pub use path::{PathPoint, Phase, Phases, RouthPath};
+pub use problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem, Impulse};
 
 use std::fmt;
 use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
+
+use crate::math::Real;
 
 /// The hypothesis that ends the collision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -58,4 +87,127 @@ impl FromStr for Law {
             .find(|l| l.name() == s)
             .ok_or_else(|| UnknownLaw(s.to_owned()))
     }
+}
+
+/// What a law computes in the paper's frame, before the energy bookkeeping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LawSolution {
+    /// The type of the collision.
+    pub kind: CollisionType,
+    /// The impulses.
+    pub impulse: Impulse,
+    /// The velocity of separation.
+    pub v_s: ContactVelocity,
+    /// The phases along the law's path in the impulse plane.
+    pub phases: Phases,
+}
+
+fn incoherent(law: &'static str, detail: String) -> ImpactError {
+    ImpactError::Incoherent { law, detail }
+}
+
+/// Solves one impact problem under the given law.
+///
+/// The steps of [P, Sect. 4.2]: check the data; orient `t` so that `v_t^A ≥ 0`
+/// (Eq. 10; for `v_t^A < 0` the problem is mirrored, `m_nt → −m_nt`, and the results are
+/// mirrored back); compute g, h, p, q, r_m, r_p, Δ, α (Eqs. 24, 34–36) and the sign case
+/// (Table 1); apply the law; check the coherence of the solution (`I_n > 0`,
+/// `v_n^S ≥ 0`, `|I_t| ≤ μ I_n`, the sign of `v_t^S` matching the type, and
+/// Eqs. (22)–(23)); compute `ΔE` (Eq. 29) and its split into the works of the normal and
+/// tangential impulses along the law's path.
+pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
+    problem.validate()?;
+    let mirrored = problem.v_a.t < 0.0;
+    let pb = if mirrored {
+        ImpactProblem {
+            w: problem.w.mirrored(),
+            v_a: ContactVelocity::new(problem.v_a.n, -problem.v_a.t),
+            ..*problem
+        }
+    } else {
+        *problem
+    };
+    let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
+    let case = c.sign_case();
+    let sol = match law {
+        Law::Newton => newton::solve(&pb, &c, case)?,
+        Law::KaneLevinson => kane_levinson::solve(&pb, &c)?,
+        Law::Poisson => poisson::solve(&pb)?,
+        Law::Stronge => stronge::solve(&pb)?,
+    };
+    check_coherence(law, &pb, &sol)?;
+    let end = sol.phases.last().end;
+    let (impulse, v_s, phases) = if mirrored {
+        (
+            Impulse::new(sol.impulse.n, -sol.impulse.t),
+            ContactVelocity::new(sol.v_s.n, -sol.v_s.t),
+            sol.phases.mirrored(),
+        )
+    } else {
+        (sol.impulse, sol.v_s, sol.phases)
+    };
+    Ok(Outcome {
+        law,
+        kind: sol.kind,
+        case,
+        coefficients: c,
+        impulse,
+        v_s,
+        phases,
+        delta_e: energy_change(impulse, problem.v_a, v_s),
+        work_n: end.work_n,
+        work_t: end.work_t,
+        mirrored,
+    })
+}
+
+/// Relative tolerance of the coherence checks: a safety net against wrong branches
+/// (errors of order one), far above rounding.
+const COHERENCE_TOL: Real = 1e-7;
+
+/// Checks a solution (paper's frame) against the coherence conditions of [P, Sect. 4.2]
+/// and the momentum relations (22)–(23).
+fn check_coherence(law: Law, pb: &ImpactProblem, sol: &LawSolution) -> Result<(), ImpactError> {
+    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
+    let wi = w.apply(i);
+    let scale = v_a.n.abs()
+        + v_a.t.abs()
+        + (w.nn * i.n).abs()
+        + (w.nt * i.t).abs()
+        + (w.nt * i.n).abs()
+        + (w.tt * i.t).abs();
+    let tol = COHERENCE_TOL * scale;
+    let fail = |detail: String| Err(incoherent(law.name(), detail));
+    if i.n <= 0.0 || !i.n.is_finite() {
+        return fail(format!("I_n = {} is not positive and finite", i.n));
+    }
+    if v_s.n < -tol {
+        return fail(format!("v_n^S = {} is negative", v_s.n));
+    }
+    let (r_n, r_t) = (v_s.n - v_a.n - wi.n, v_s.t - v_a.t - wi.t);
+    if r_n.abs() > tol || r_t.abs() > tol {
+        return fail(format!(
+            "Eqs. (22)–(23) do not hold: residuals {r_n:e}, {r_t:e}"
+        ));
+    }
+    if i.t.abs() > pb.mu * i.n * (1.0 + COHERENCE_TOL) {
+        return fail(format!(
+            "|I_t| = {} exceeds μ I_n = {}",
+            i.t.abs(),
+            pb.mu * i.n
+        ));
+    }
+    let sign_ok = match sol.kind {
+        CollisionType::Sticking => v_s.t.abs() <= tol,
+        CollisionType::ForwardSliding => v_s.t >= -tol,
+        CollisionType::ReverseSliding => v_s.t <= tol,
+    };
+    if !sign_ok {
+        return fail(format!(
+            "v_t^S = {} does not match the type {}",
+            v_s.t,
+            sol.kind.name()
+        ));
+    }
+    Ok(())
 }

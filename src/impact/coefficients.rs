@@ -1,0 +1,98 @@
+//! The configuration coefficients of [P, Sect. 3]: g, h, p, q, r_m, r_p, Δ, α, and the
+//! sign case of Table 1.
+
+use serde::{Deserialize, Serialize};
+
+use super::problem::{ContactVelocity, ImpactMatrix};
+use crate::math::Real;
+
+/// The coefficients that decide the type of a collision [P, Eqs. (24), (34)–(36)], in the
+/// paper's frame (`t` oriented so that `v_t^A ≥ 0`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Coefficients {
+    /// `g = μ m_tt − m_nt`: the rate at which forward sliding slows, `dv_t/dI_n = −g`.
+    pub g: Real,
+    /// `h = m_nn − μ m_nt`: `dv_n/dI_n` during forward sliding.
+    pub h: Real,
+    /// `p = μ m_tt + m_nt`: `dv_t/dI_n = p` during reverse sliding.
+    pub p: Real,
+    /// `q = m_nn + μ m_nt`: `dv_n/dI_n` during reverse sliding.
+    pub q: Real,
+    /// `r_m = g / h` [P, Eq. (36)] (infinite when `h = 0`).
+    pub r_m: Real,
+    /// `r_p = p / q` [P, Eq. (36)] (infinite when `q = 0`).
+    pub r_p: Real,
+    /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)].
+    pub det: Real,
+    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)], ≥ 0.
+    pub alpha: Real,
+}
+
+impl Coefficients {
+    /// Computes the coefficients for `W`, `μ` and a velocity of approach with
+    /// `v_n^A < 0 ≤ v_t^A`.
+    ///
+    /// Implements [P, Eqs. (24), (34)–(36)]:
+    /// `g = μ m_tt − m_nt`, `h = m_nn − μ m_nt`, `p = μ m_tt + m_nt`, `q = m_nn + μ m_nt`,
+    /// `r_m = g/h`, `r_p = p/q`, `Δ = m_nn m_tt − m_nt²`, `α = v_t^A / |v_n^A|`.
+    /// Identities (used by the tests): `g + p = 2μ m_tt`, `h + q = 2 m_nn`,
+    /// `g q + h p = 2μΔ` [P, Eq. (37)].
+    pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
+        let g = mu * w.tt - w.nt;
+        let h = w.nn - mu * w.nt;
+        let p = mu * w.tt + w.nt;
+        let q = w.nn + mu * w.nt;
+        Self {
+            g,
+            h,
+            p,
+            q,
+            r_m: g / h,
+            r_p: p / q,
+            det: w.det(),
+            alpha: v_a.t / -v_a.n,
+        }
+    }
+
+    /// The sign case 1–5 of (g, h, p, q) [P, Table 1, columns 2–5].
+    ///
+    /// At most one of g, h, p, q is negative, because `g + p = 2μ m_tt ≥ 0`,
+    /// `h + q = 2 m_nn > 0` and `g q + h p = 2μΔ ≥ 0`. A zero is counted as positive: by
+    /// [P, Comment g] the equal signs can be added to the inequalities of the table and
+    /// the solution stays the same on either side.
+    pub fn sign_case(&self) -> SignCase {
+        if self.g < 0.0 {
+            SignCase::Five
+        } else if self.h < 0.0 {
+            SignCase::Four
+        } else if self.p < 0.0 {
+            SignCase::Three
+        } else if self.q < 0.0 {
+            SignCase::Two
+        } else {
+            SignCase::One
+        }
+    }
+}
+
+/// The admissible sign variations of (g, h, p, q) [P, Table 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum SignCase {
+    /// g, h, p, q > 0: sticking for `α < (1+e) r_m`, forward sliding above.
+    One = 1,
+    /// q < 0: sticking for `α < (1+e) r_m`, forward sliding above.
+    Two = 2,
+    /// p < 0: reverse sliding for `α < (1+e) r_m`, forward sliding above.
+    Three = 3,
+    /// h < 0: sticking for every `α`.
+    Four = 4,
+    /// g < 0: forward sliding for every `α`.
+    Five = 5,
+}
+
+impl SignCase {
+    /// The case number 1–5 of Table 1.
+    pub fn number(self) -> u8 {
+        self as u8
+    }
+}

@@ -1,0 +1,353 @@
+//! Routh's path in the impulse plane [P, Sect. 4.1, Fig. 2]: forward sliding along
+//! `L_FS` until the slip stops at point G, then sticking along `L_ST` or reverse sliding
+//! along `L_RS`. Along each phase the contact velocity, the tangential impulse and the
+//! works are linear or quadratic in `I_n`, so every end condition closes in algebra.
+
+use serde::{Deserialize, Serialize};
+
+use super::outcome::CollisionType;
+use super::problem::{ContactVelocity, ImpactMatrix, Impulse};
+use crate::math::Real;
+
+/// A point of the collision, reached after the normal impulse `i.n`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PathPoint {
+    /// Accumulated impulse `(Ĩ_n, Ĩ_t)` [P, Eq. (54)] (N·s).
+    pub i: Impulse,
+    /// Contact velocity there, `v^A + W Ĩ` [P, Eqs. (22)–(23)] (m/s).
+    pub v: ContactVelocity,
+    /// Work of the normal impulse so far, `∫ v_n dĨ_n` (J).
+    pub work_n: Real,
+    /// Work of the tangential impulse so far, `∫ v_t dĨ_t` (J).
+    pub work_t: Real,
+}
+
+/// Rates of change along a phase, per unit normal impulse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Slope {
+    /// `dĨ_t / dĨ_n`.
+    di_t: Real,
+    /// `dv_n / dĨ_n`.
+    dv_n: Real,
+    /// `dv_t / dĨ_n`.
+    dv_t: Real,
+}
+
+impl Slope {
+    /// The point reached from `p0` after the normal impulse `x` along this slope: the
+    /// velocities are linear in `x`, the works quadratic,
+    /// `W_n += v_n0 x + ½ dv_n x²`, `W_t += dĨ_t (v_t0 x + ½ dv_t x²)`.
+    fn advance(&self, p0: &PathPoint, x: Real) -> PathPoint {
+        PathPoint {
+            i: Impulse::new(p0.i.n + x, p0.i.t + self.di_t * x),
+            v: ContactVelocity::new(p0.v.n + self.dv_n * x, p0.v.t + self.dv_t * x),
+            work_n: p0.work_n + x * (p0.v.n + 0.5 * self.dv_n * x),
+            work_t: p0.work_t + self.di_t * x * (p0.v.t + 0.5 * self.dv_t * x),
+        }
+    }
+}
+
+/// One phase of a collision: its slip mode and its end points.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Phase {
+    /// The slip mode during the phase.
+    pub kind: CollisionType,
+    /// Where the phase starts.
+    pub start: PathPoint,
+    /// Where it ends.
+    pub end: PathPoint,
+}
+
+/// The phases of a collision, one or two, stored inline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Phases {
+    len: usize,
+    items: [Phase; 2],
+}
+
+impl Phases {
+    /// A single phase.
+    pub fn one(phase: Phase) -> Self {
+        Self {
+            len: 1,
+            items: [phase, phase],
+        }
+    }
+
+    /// Two phases, in order.
+    pub fn two(first: Phase, second: Phase) -> Self {
+        Self {
+            len: 2,
+            items: [first, second],
+        }
+    }
+
+    /// The phases, in order.
+    pub fn as_slice(&self) -> &[Phase] {
+        &self.items[..self.len]
+    }
+
+    /// The end of the collision.
+    pub fn last(&self) -> &Phase {
+        &self.items[self.len - 1]
+    }
+
+    /// The same phases in the frame whose tangent is `−t`.
+    pub(super) fn mirrored(&self) -> Self {
+        let flip = |p: PathPoint| PathPoint {
+            i: Impulse::new(p.i.n, -p.i.t),
+            v: ContactVelocity::new(p.v.n, -p.v.t),
+            ..p
+        };
+        let mut out = *self;
+        for ph in &mut out.items {
+            ph.start = flip(ph.start);
+            ph.end = flip(ph.end);
+        }
+        out
+    }
+}
+
+/// Routh's path for given `W`, `μ` and a velocity of approach with `v_t^A ≥ 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RouthPath {
+    /// The origin: no impulse yet, velocity `v^A`.
+    origin: PathPoint,
+    /// Phase 1, forward sliding along `L_FS`.
+    slide: Slope,
+    /// `Ĩ_n(G)` where the slip stops [P, Eq. (58)]; infinite when it never does.
+    i_g: Real,
+    /// The point G (meaningful when `i_g` is finite).
+    at_g: PathPoint,
+    /// The mode after G: sticking or reverse sliding.
+    after: CollisionType,
+    /// Phase 2 along `L_ST` or `L_RS`.
+    after_slope: Slope,
+}
+
+impl RouthPath {
+    /// Builds the path.
+    ///
+    /// Implements [P, Eqs. (55)–(61)], rewritten per unit normal impulse with
+    /// `v = v^A + W Ĩ`:
+    /// - forward sliding (`L_FS`, Eq. 55): `dĨ_t = −μ dĨ_n`, so `dv_n = h dĨ_n`,
+    ///   `dv_t = −g dĨ_n`;
+    /// - the slip stops at `Ĩ_n(G) = v_t^A / g` (Eq. 58) if `g > 0`, never if `g ≤ 0`
+    ///   (for `v_t^A = 0`: at once if `g ≥ 0`);
+    /// - then sticking (`L_ST`, Eq. 56) if the friction cone holds the contact,
+    ///   `|m_nt| ≤ μ m_tt` ⇔ `g ≥ 0, p ≥ 0` (Eq. 59): `dĨ_t = −(m_nt/m_tt) dĨ_n`,
+    ///   `dv_n = (Δ/m_tt) dĨ_n`, `dv_t = 0`;
+    /// - or reverse sliding (`L_RS`, Eq. 57) if `p < 0` (Eq. 60): `dĨ_t = μ dĨ_n`,
+    ///   `dv_n = q dĨ_n`, `dv_t = p dĨ_n`.
+    pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
+        debug_assert!(v_a.t >= 0.0, "the path is built in the paper's frame");
+        let g = mu * w.tt - w.nt;
+        let h = w.nn - mu * w.nt;
+        let p = mu * w.tt + w.nt;
+        let q = w.nn + mu * w.nt;
+        let origin = PathPoint {
+            i: Impulse::default(),
+            v: v_a,
+            work_n: 0.0,
+            work_t: 0.0,
+        };
+        let slide = Slope {
+            di_t: -mu,
+            dv_n: h,
+            dv_t: -g,
+        };
+        let i_g = if v_a.t == 0.0 {
+            if g >= 0.0 { 0.0 } else { Real::INFINITY }
+        } else if g > 0.0 {
+            v_a.t / g
+        } else {
+            Real::INFINITY
+        };
+        let mut at_g = slide.advance(&origin, if i_g.is_finite() { i_g } else { 0.0 });
+        // At G the slip is zero by definition (Eq. 39); do not keep the rounding residue.
+        at_g.v.t = 0.0;
+        let (after, after_slope) = if p >= 0.0 {
+            (
+                CollisionType::Sticking,
+                Slope {
+                    di_t: -w.nt / w.tt,
+                    dv_n: w.det() / w.tt,
+                    dv_t: 0.0,
+                },
+            )
+        } else {
+            (
+                CollisionType::ReverseSliding,
+                Slope {
+                    di_t: mu,
+                    dv_n: q,
+                    dv_t: p,
+                },
+            )
+        };
+        Self {
+            origin,
+            slide,
+            i_g,
+            at_g,
+            after,
+            after_slope,
+        }
+    }
+
+    /// `Ĩ_n(G)`, infinite when the slip never stops [P, Eq. (58)].
+    pub fn i_g(&self) -> Real {
+        self.i_g
+    }
+
+    /// The slip mode after G.
+    pub fn after_g(&self) -> CollisionType {
+        self.after
+    }
+
+    /// The slip mode of a collision that ends at the normal impulse `i_n`: forward
+    /// sliding up to and including G, then the mode after G.
+    pub fn kind_at(&self, i_n: Real) -> CollisionType {
+        if i_n <= self.i_g {
+            CollisionType::ForwardSliding
+        } else {
+            self.after
+        }
+    }
+
+    /// The point of the path at the normal impulse `i_n ≥ 0`.
+    pub fn at(&self, i_n: Real) -> PathPoint {
+        if i_n <= self.i_g {
+            let mut pt = self.slide.advance(&self.origin, i_n);
+            if self.i_g.is_finite() {
+                // v_t = v_t^A − g Ĩ_n = g (Ĩ_n(G) − Ĩ_n): exactly zero at G, never negative.
+                pt.v.t = -self.slide.dv_t * (self.i_g - i_n);
+            }
+            pt
+        } else {
+            self.after_slope.advance(&self.at_g, i_n - self.i_g)
+        }
+    }
+
+    /// The normal impulse at which the normal velocity reaches `target > v_n^A` on its
+    /// way up (the last crossing: in Case 4, `h < 0`, `v_n` first decreases).
+    ///
+    /// Phase 1: `Ĩ_n = (target − v_n^A)/h` if `h > 0` and this is before G; else
+    /// phase 2: `Ĩ_n = Ĩ_n(G) + (target − v_n(G)) / (dv_n/dĨ_n)`.
+    /// `None` if the path never gets there (impossible for positive definite `W`).
+    pub fn reach_normal_velocity(&self, target: Real) -> Option<Real> {
+        if self.slide.dv_n > 0.0 {
+            let x = (target - self.origin.v.n) / self.slide.dv_n;
+            if x <= self.i_g {
+                return Some(x);
+            }
+        }
+        if !self.i_g.is_finite() || self.after_slope.dv_n <= 0.0 {
+            return None;
+        }
+        let x = (target - self.at_g.v.n) / self.after_slope.dv_n;
+        (x >= 0.0).then_some(self.i_g + x)
+    }
+
+    /// The normal impulse at which the work of the normal impulse, counted from the point
+    /// `from` (where `v_n ≥ 0`, rising), reaches `work ≥ 0`.
+    ///
+    /// On a phase starting at `v_n0` with slope `s`, the work after `x` is
+    /// `v_n0 x + ½ s x² = R`, so `x = 2R / (v_n0 + √(v_n0² + 2 s R))` (the stable root).
+    pub fn reach_normal_work(&self, from: &PathPoint, work: Real) -> Option<Real> {
+        let mut remaining = work;
+        let (mut p0, mut slope, mut room) = if from.i.n < self.i_g {
+            (*from, self.slide, self.i_g - from.i.n)
+        } else {
+            (*from, self.after_slope, Real::INFINITY)
+        };
+        loop {
+            let x = rising_root(p0.v.n, slope.dv_n, remaining)?;
+            if x <= room {
+                return Some(p0.i.n + x);
+            }
+            // The phase ends first: spend its work and go on after G.
+            remaining -= room * (p0.v.n + 0.5 * slope.dv_n * room);
+            p0 = self.at_g;
+            slope = self.after_slope;
+            room = Real::INFINITY;
+        }
+    }
+
+    /// The phases travelled until the normal impulse `i_n` (an empty first phase, when
+    /// the slip is zero from the start, is left out).
+    pub fn phases_until(&self, i_n: Real) -> Phases {
+        let end = self.at(i_n);
+        if i_n <= self.i_g {
+            Phases::one(Phase {
+                kind: CollisionType::ForwardSliding,
+                start: self.origin,
+                end,
+            })
+        } else if self.i_g == 0.0 {
+            Phases::one(Phase {
+                kind: self.after,
+                start: self.origin,
+                end,
+            })
+        } else {
+            Phases::two(
+                Phase {
+                    kind: CollisionType::ForwardSliding,
+                    start: self.origin,
+                    end: self.at_g,
+                },
+                Phase {
+                    kind: self.after,
+                    start: self.at_g,
+                    end,
+                },
+            )
+        }
+    }
+}
+
+/// The root `x ≥ 0` of `v0 x + ½ s x² = r` for `r ≥ 0` on a rising branch, in the form
+/// without cancellation; `None` if there is none.
+fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
+    if r <= 0.0 {
+        return Some(0.0);
+    }
+    let disc = v0 * v0 + 2.0 * s * r;
+    if disc < 0.0 {
+        return None;
+    }
+    let den = v0 + disc.sqrt();
+    (den > 0.0).then(|| 2.0 * r / den)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rising_root_solves_the_quadratic() {
+        for &(v0, s, r) in &[
+            (1.0, 2.0, 3.0),
+            (0.0, 2.0, 1.0),
+            (2.0, 0.0, 1.0),
+            (1e-9, 4.0, 2.0),
+        ] {
+            let x = rising_root(v0, s, r).unwrap();
+            assert!((v0 * x + 0.5 * s * x * x - r).abs() <= 1e-14 * r.max(1.0));
+        }
+        assert_eq!(rising_root(0.0, 0.0, 0.0), Some(0.0));
+        assert_eq!(rising_root(0.0, 0.0, 1.0), None);
+    }
+
+    #[test]
+    fn path_is_continuous_at_g() {
+        let w = ImpactMatrix::new(0.34, -0.51, 0.81);
+        let path = RouthPath::new(&w, 0.5, ContactVelocity::new(-0.27, 0.53));
+        let ig = path.i_g();
+        let (a, b) = (path.at(ig * (1.0 - 1e-12)), path.at(ig * (1.0 + 1e-12)));
+        assert!((a.v.n - b.v.n).abs() < 1e-12);
+        assert!((a.i.t - b.i.t).abs() < 1e-12);
+        assert!((a.work_n - b.work_n).abs() < 1e-12);
+    }
+}

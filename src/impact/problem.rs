@@ -1,0 +1,207 @@
+//! The data of a one-point impact problem: the matrix `W`, the velocity of approach, `e`
+//! and `μ`; their validation; the impulse and velocity pairs in the contact frame.
+
+use serde::{Deserialize, Serialize};
+
+use crate::math::Real;
+
+/// The 2×2 matrix `W = [[m_nn, m_nt], [m_nt, m_tt]]` of [P, Eq. (20)], mapping the
+/// impulses `(I_n, I_t)` to the jump of the contact velocity: `v^S − v^A = W I`
+/// [P, Eqs. (22)–(23)]. Symmetric positive definite (`W = J M⁻¹ Jᵀ` with the usual
+/// positive definite `M`). Units: 1/kg for a particle, in general (m/s)/(N·s).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImpactMatrix {
+    /// `m_nn`: normal velocity change per unit normal impulse (> 0).
+    #[serde(rename = "mnn")]
+    pub nn: Real,
+    /// `m_nt`: normal velocity change per unit tangential impulse (either sign).
+    #[serde(rename = "mnt")]
+    pub nt: Real,
+    /// `m_tt`: tangential velocity change per unit tangential impulse (> 0).
+    #[serde(rename = "mtt")]
+    pub tt: Real,
+}
+
+impl ImpactMatrix {
+    /// The matrix from its three distinct entries.
+    pub fn new(nn: Real, nt: Real, tt: Real) -> Self {
+        Self { nn, nt, tt }
+    }
+
+    /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)], positive for a positive definite `W`.
+    #[inline]
+    pub fn det(&self) -> Real {
+        self.nn * self.tt - self.nt * self.nt
+    }
+
+    /// The velocity jump `W I` produced by the impulse `I` [P, Eqs. (22)–(23)]:
+    /// `Δv_n = m_nn I_n + m_nt I_t`, `Δv_t = m_nt I_n + m_tt I_t`.
+    #[inline]
+    pub fn apply(&self, i: Impulse) -> ContactVelocity {
+        ContactVelocity {
+            n: self.nn * i.n + self.nt * i.t,
+            t: self.nt * i.n + self.tt * i.t,
+        }
+    }
+
+    /// The same matrix in the frame whose tangent is `−t`: `m_nt` changes sign.
+    #[inline]
+    pub fn mirrored(&self) -> Self {
+        Self {
+            nt: -self.nt,
+            ..*self
+        }
+    }
+}
+
+/// A contact velocity in the frame `(n, t)` (m/s): the velocity of approach `v^A`, of
+/// separation `v^S`, or any velocity along the collision [P, Eq. (21)].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ContactVelocity {
+    /// Normal component `v·n` (m/s); negative while the points approach.
+    pub n: Real,
+    /// Tangential component `v·t` (m/s).
+    pub t: Real,
+}
+
+impl ContactVelocity {
+    /// The velocity from its normal and tangential components.
+    pub fn new(n: Real, t: Real) -> Self {
+        Self { n, t }
+    }
+}
+
+/// An impulse in the frame `(n, t)` (N·s) [P, Eq. (13)].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Impulse {
+    /// Normal impulse `I_n` (N·s), positive: the surfaces only push.
+    pub n: Real,
+    /// Tangential impulse `I_t` (N·s).
+    pub t: Real,
+}
+
+impl Impulse {
+    /// The impulse from its normal and tangential components.
+    pub fn new(n: Real, t: Real) -> Self {
+        Self { n, t }
+    }
+}
+
+/// A one-point planar impact problem: everything an impact law needs.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImpactProblem {
+    /// `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)].
+    pub w: ImpactMatrix,
+    /// Velocity of approach `v^A` (m/s): `v_n^A < 0`; `v_t^A` of either sign (for
+    /// `v_t^A < 0` the laws mirror `t` and report in the caller's frame).
+    pub v_a: ContactVelocity,
+    /// Coefficient of restitution `e ∈ [0, 1]` (kinematic, kinetic or energetic
+    /// according to the law).
+    pub e: Real,
+    /// Coulomb's coefficient of friction `μ ≥ 0`, static and dynamic alike [P, Sect. 3].
+    pub mu: Real,
+}
+
+/// Why an impact problem cannot be solved.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ImpactError {
+    /// An input is NaN or infinite.
+    #[error("{what} is not finite ({value})")]
+    NonFinite {
+        /// The input's name (`m_nn`, `v_n^A`, `e`, …).
+        what: &'static str,
+        /// Its value.
+        value: Real,
+    },
+    /// `W` is not (numerically) positive definite.
+    #[error(
+        "W is not positive definite: m_nn = {nn}, m_nt = {nt}, m_tt = {tt}, \
+         Δ = m_nn m_tt − m_nt² = {det}"
+    )]
+    NotPositiveDefinite {
+        /// `m_nn`.
+        nn: Real,
+        /// `m_nt`.
+        nt: Real,
+        /// `m_tt`.
+        tt: Real,
+        /// `Δ`.
+        det: Real,
+    },
+    /// The points do not approach: `v_n^A ≥ 0`.
+    #[error("the points do not approach: v_n^A = {vn} must be negative")]
+    NotApproaching {
+        /// `v_n^A` (m/s).
+        vn: Real,
+    },
+    /// `e` outside `[0, 1]`.
+    #[error("the coefficient of restitution e = {e} is outside [0, 1]")]
+    RestitutionOutOfRange {
+        /// `e`.
+        e: Real,
+    },
+    /// `μ < 0`.
+    #[error("the coefficient of friction μ = {mu} is negative")]
+    NegativeFriction {
+        /// `μ`.
+        mu: Real,
+    },
+    /// The law's solution fails a coherence condition of [P, Sect. 4.2] beyond rounding:
+    /// a bug, never an expected outcome.
+    #[error("incoherent {law} solution: {detail}")]
+    Incoherent {
+        /// The law's name.
+        law: &'static str,
+        /// The failed condition.
+        detail: String,
+    },
+}
+
+/// The smallest relative determinant `Δ / (m_nn m_tt)` accepted: below it `W` is
+/// singular to working precision and the closed forms divide by rounding noise.
+const MIN_RELATIVE_DET: Real = 16.0 * Real::EPSILON;
+
+impl ImpactProblem {
+    /// The problem from its four data.
+    pub fn new(w: ImpactMatrix, v_a: ContactVelocity, e: Real, mu: Real) -> Self {
+        Self { w, v_a, e, mu }
+    }
+
+    /// Checks the data: finite numbers, `W` positive definite, `v_n^A < 0`,
+    /// `e ∈ [0, 1]`, `μ ≥ 0`.
+    pub fn validate(&self) -> Result<(), ImpactError> {
+        let named = [
+            ("m_nn", self.w.nn),
+            ("m_nt", self.w.nt),
+            ("m_tt", self.w.tt),
+            ("v_n^A", self.v_a.n),
+            ("v_t^A", self.v_a.t),
+            ("e", self.e),
+            ("μ", self.mu),
+        ];
+        for (what, value) in named {
+            if !value.is_finite() {
+                return Err(ImpactError::NonFinite { what, value });
+            }
+        }
+        let det = self.w.det();
+        if !(self.w.nn > 0.0 && self.w.tt > 0.0 && det > MIN_RELATIVE_DET * self.w.nn * self.w.tt) {
+            return Err(ImpactError::NotPositiveDefinite {
+                nn: self.w.nn,
+                nt: self.w.nt,
+                tt: self.w.tt,
+                det,
+            });
+        }
+        if self.v_a.n >= 0.0 {
+            return Err(ImpactError::NotApproaching { vn: self.v_a.n });
+        }
+        if !(0.0..=1.0).contains(&self.e) {
+            return Err(ImpactError::RestitutionOutOfRange { e: self.e });
+        }
+        if self.mu < 0.0 {
+            return Err(ImpactError::NegativeFriction { mu: self.mu });
+        }
+        Ok(())
+    }
+}
