@@ -583,7 +583,8 @@ fn bad_input_is_a_typed_error() {
         0.3,
     );
     assert!(impact::solve(Law::Newton, &ok).is_ok());
-    let cases: Vec<(ImpactProblem, fn(&ImpactError) -> bool)> = vec![
+    type IsError = fn(&ImpactError) -> bool;
+    let cases: Vec<(ImpactProblem, IsError)> = vec![
         (
             ImpactProblem {
                 w: ImpactMatrix::new(1.0, 1.0, 1.0),
