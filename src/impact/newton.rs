@@ -83,11 +83,12 @@ pub fn solve(
             )
         }
     };
+    let v_s = ContactVelocity::new(e * big_v, v_st);
     let path = RouthPath::new(w, mu, pb.v_a);
     Ok(LawSolution {
         kind,
         impulse,
-        v_s: ContactVelocity::new(e * big_v, v_st),
-        phases: path.phases_until(impulse.n),
+        v_s,
+        phases: path.phases_until(impulse.n).ending_at(impulse, v_s),
     })
 }

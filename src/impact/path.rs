@@ -92,6 +92,15 @@ impl Phases {
         &self.items[self.len - 1]
     }
 
+    /// The same phases ending exactly at the impulse `i` and velocity `v` (a closed form's
+    /// values, equal to the path's own end up to rounding).
+    pub(super) fn ending_at(mut self, i: Impulse, v: ContactVelocity) -> Self {
+        let last = &mut self.items[self.len - 1].end;
+        last.i = i;
+        last.v = v;
+        self
+    }
+
     /// The same phases in the frame whose tangent is `−t`.
     pub(super) fn mirrored(&self) -> Self {
         let flip = |p: PathPoint| PathPoint {
