@@ -190,7 +190,7 @@ fn kane_levinson_candidates(pb: &ImpactProblem) -> [Candidate; 3] {
 /// of the piecewise-linear v_n(I_n).
 fn compression_split(out: &Outcome) -> (f64, f64, f64) {
     let (mut i_c, mut w_c, mut w_r) = (f64::NAN, 0.0, 0.0);
-    for ph in out.phases.as_slice() {
+    for ph in out.phases.iter() {
         let (a, b) = (ph.start, ph.end);
         let dx = b.i.n - a.i.n;
         if a.v.n < 0.0 && b.v.n > 0.0 {
@@ -226,7 +226,7 @@ proptest! {
         prop_assert!(out.impulse.n > 0.0);
         prop_assert!(out.impulse.t.abs() <= pb.mu * out.impulse.n * (1.0 + 1e-12), "{:?}", out.impulse);
         let sgn = if out.mirrored { -1.0 } else { 1.0 };
-        for ph in out.phases.as_slice() {
+        for ph in out.phases.iter() {
             for p in [ph.start, ph.end] {
                 let r = momentum_residual(&pb, Vector2::new(p.i.n, p.i.t), Vector2::new(p.v.n, p.v.t));
                 prop_assert!(r.norm() <= tol, "phase point residual {r:?}");

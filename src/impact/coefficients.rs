@@ -7,8 +7,9 @@ use super::problem::{ContactVelocity, ImpactMatrix};
 use crate::math::Real;
 
 /// The coefficients that decide the type of a collision [P, Eqs. (24), (34)–(36)], in the
-/// paper's frame (`t` oriented so that `v_t^A ≥ 0`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// paper's frame (`t` oriented so that `v_t^A ≥ 0`). The ratios `r_m`, `r_p` and `α` are
+/// computed on demand: the laws themselves compare products and never divide by them.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Coefficients {
     /// `g = μ m_tt − m_nt`: the rate at which forward sliding slows, `dv_t/dI_n = −g`.
     pub g: Real,
@@ -18,40 +19,47 @@ pub struct Coefficients {
     pub p: Real,
     /// `q = m_nn + μ m_nt`: `dv_n/dI_n` during reverse sliding.
     pub q: Real,
-    /// `r_m = g / h` [P, Eq. (36)] (infinite when `h = 0`).
-    pub r_m: Real,
-    /// `r_p = p / q` [P, Eq. (36)] (infinite when `q = 0`).
-    pub r_p: Real,
     /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)].
     pub det: Real,
-    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)], ≥ 0.
-    pub alpha: Real,
+    /// `|v_n^A|` (m/s).
+    v_n: Real,
+    /// `v_t^A ≥ 0` (m/s).
+    v_t: Real,
 }
 
 impl Coefficients {
     /// Computes the coefficients for `W`, `μ` and a velocity of approach with
     /// `v_n^A < 0 ≤ v_t^A`.
     ///
-    /// Implements [P, Eqs. (24), (34)–(36)]:
+    /// Implements [P, Eqs. (24), (35)]:
     /// `g = μ m_tt − m_nt`, `h = m_nn − μ m_nt`, `p = μ m_tt + m_nt`, `q = m_nn + μ m_nt`,
-    /// `r_m = g/h`, `r_p = p/q`, `Δ = m_nn m_tt − m_nt²`, `α = v_t^A / |v_n^A|`.
-    /// Identities (used by the tests): `g + p = 2μ m_tt`, `h + q = 2 m_nn`,
-    /// `g q + h p = 2μΔ` [P, Eq. (37)].
+    /// `Δ = m_nn m_tt − m_nt²`. Identities (used by the tests): `g + p = 2μ m_tt`,
+    /// `h + q = 2 m_nn`, `g q + h p = 2μΔ` [P, Eq. (37)].
     pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
-        let g = mu * w.tt - w.nt;
-        let h = w.nn - mu * w.nt;
-        let p = mu * w.tt + w.nt;
-        let q = w.nn + mu * w.nt;
         Self {
-            g,
-            h,
-            p,
-            q,
-            r_m: g / h,
-            r_p: p / q,
+            g: mu * w.tt - w.nt,
+            h: w.nn - mu * w.nt,
+            p: mu * w.tt + w.nt,
+            q: w.nn + mu * w.nt,
             det: w.det(),
-            alpha: v_a.t / -v_a.n,
+            v_n: -v_a.n,
+            v_t: v_a.t,
         }
+    }
+
+    /// `r_m = g / h` [P, Eq. (36)] (infinite when `h = 0`).
+    pub fn r_m(&self) -> Real {
+        self.g / self.h
+    }
+
+    /// `r_p = p / q` [P, Eq. (36)] (infinite when `q = 0`).
+    pub fn r_p(&self) -> Real {
+        self.p / self.q
+    }
+
+    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)], ≥ 0.
+    pub fn alpha(&self) -> Real {
+        self.v_t / self.v_n
     }
 
     /// The sign case 1–5 of (g, h, p, q) [P, Table 1, columns 2–5].

@@ -1,11 +1,11 @@
 //! Newton's hypothesis without the bisection of the collision time: the theory of Kane
 //! and Levinson [P, Appendix C].
 
+use super::LawSolution;
 use super::coefficients::Coefficients;
 use super::outcome::CollisionType;
-use super::path::{PathPoint, Phase, Phases};
+use super::path::{PathPoint, Phases};
 use super::problem::{ContactVelocity, ImpactProblem, Impulse};
-use super::{LawSolution, incoherent};
 
 /// One single-phase candidate and whether it is coherent.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,34 +71,22 @@ pub fn candidates(pb: &ImpactProblem, c: &Coefficients) -> [Candidate; 3] {
 /// of the three single-phase candidates. Its phase is the straight segment from the
 /// origin of the impulse plane to `(I_n, I_t)`, along which the works are
 /// `½ I_n (v_n^A + v_n^S)` and `½ I_t (v_t^A + v_t^S)`, the two terms of Eq. (29).
-pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> Result<LawSolution, super::ImpactError> {
+pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let Some(chosen) = candidates(pb, c).into_iter().find(|k| k.coherent) else {
-        return Err(incoherent(
-            "kane-levinson",
-            "no coherent candidate (Appendix C says there always is one)".to_owned(),
-        ));
+        return LawSolution::failed("no coherent candidate (Appendix C says there always is one)");
     };
     let (i, v_a, v_s) = (chosen.impulse, pb.v_a, chosen.v_s);
-    let origin = PathPoint {
-        i: Impulse::default(),
-        v: v_a,
-        work_n: 0.0,
-        work_t: 0.0,
-    };
     let end = PathPoint {
         i,
         v: v_s,
         work_n: 0.5 * i.n * (v_a.n + v_s.n),
         work_t: 0.5 * i.t * (v_a.t + v_s.t),
     };
-    Ok(LawSolution {
+    LawSolution {
         kind: chosen.kind,
         impulse: i,
         v_s,
-        phases: Phases::one(Phase {
-            kind: chosen.kind,
-            start: origin,
-            end,
-        }),
-    })
+        phases: Phases::one(v_a, chosen.kind, end),
+        failure: None,
+    }
 }

@@ -100,6 +100,23 @@ pub struct LawSolution {
     pub v_s: ContactVelocity,
     /// The phases along the law's path in the impulse plane.
     pub phases: Phases,
+    /// Why the law found no solution (impossible for valid data; reported as
+    /// [`ImpactError::Incoherent`]).
+    pub failure: Option<&'static str>,
+}
+
+impl LawSolution {
+    /// A law's report that it found no solution.
+    fn failed(why: &'static str) -> Self {
+        let nowhere = PathPoint::default();
+        Self {
+            kind: CollisionType::Sticking,
+            impulse: Impulse::default(),
+            v_s: ContactVelocity::default(),
+            phases: Phases::one(ContactVelocity::default(), CollisionType::Sticking, nowhere),
+            failure: Some(why),
+        }
+    }
 }
 
 fn incoherent(law: &'static str, detail: String) -> ImpactError {
@@ -129,34 +146,33 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
     };
     let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
     let case = c.sign_case();
-    let sol = match law {
-        Law::Newton => newton::solve(&pb, &c, case)?,
-        Law::KaneLevinson => kane_levinson::solve(&pb, &c)?,
-        Law::Poisson => poisson::solve(&pb)?,
-        Law::Stronge => stronge::solve(&pb)?,
+    let mut sol = match law {
+        Law::Newton => newton::solve(&pb, &c, case),
+        Law::KaneLevinson => kane_levinson::solve(&pb, &c),
+        Law::Poisson => poisson::solve(&pb, &c),
+        Law::Stronge => stronge::solve(&pb, &c),
     };
+    if let Some(why) = sol.failure {
+        return Err(incoherent(law.name(), why.to_owned()));
+    }
     check_coherence(law, &pb, &sol)?;
-    let end = sol.phases.last().end;
-    let (impulse, v_s, phases) = if mirrored {
-        (
-            Impulse::new(sol.impulse.n, -sol.impulse.t),
-            ContactVelocity::new(sol.v_s.n, -sol.v_s.t),
-            sol.phases.mirrored(),
-        )
-    } else {
-        (sol.impulse, sol.v_s, sol.phases)
-    };
+    if mirrored {
+        sol.impulse.t = -sol.impulse.t;
+        sol.v_s.t = -sol.v_s.t;
+        sol.phases.mirror();
+    }
+    let end = *sol.phases.end();
     Ok(Outcome {
         law,
         kind: sol.kind,
         case,
         coefficients: c,
-        impulse,
-        v_s,
-        phases,
-        delta_e: energy_change(impulse, problem.v_a, v_s),
+        impulse: sol.impulse,
+        v_s: sol.v_s,
+        delta_e: energy_change(sol.impulse, problem.v_a, sol.v_s),
         work_n: end.work_n,
         work_t: end.work_t,
+        phases: sol.phases,
         mirrored,
     })
 }
@@ -166,7 +182,8 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
 const COHERENCE_TOL: Real = 1e-7;
 
 /// Checks a solution (paper's frame) against the coherence conditions of [P, Sect. 4.2]
-/// and the momentum relations (22)–(23).
+/// and the momentum relations (22)–(23): `I_n > 0`, `v_n^S ≥ 0`, `|I_t| ≤ μ I_n`, the sign
+/// of `v_t^S` matching the type, `v^S − v^A = W I`.
 fn check_coherence(law: Law, pb: &ImpactProblem, sol: &LawSolution) -> Result<(), ImpactError> {
     let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
     let wi = w.apply(i);
@@ -177,37 +194,46 @@ fn check_coherence(law: Law, pb: &ImpactProblem, sol: &LawSolution) -> Result<()
         + (w.nt * i.n).abs()
         + (w.tt * i.t).abs();
     let tol = COHERENCE_TOL * scale;
-    let fail = |detail: String| Err(incoherent(law.name(), detail));
-    if i.n <= 0.0 || !i.n.is_finite() {
-        return fail(format!("I_n = {} is not positive and finite", i.n));
-    }
-    if v_s.n < -tol {
-        return fail(format!("v_n^S = {} is negative", v_s.n));
-    }
-    let (r_n, r_t) = (v_s.n - v_a.n - wi.n, v_s.t - v_a.t - wi.t);
-    if r_n.abs() > tol || r_t.abs() > tol {
-        return fail(format!(
-            "Eqs. (22)–(23) do not hold: residuals {r_n:e}, {r_t:e}"
-        ));
-    }
-    if i.t.abs() > pb.mu * i.n * (1.0 + COHERENCE_TOL) {
-        return fail(format!(
-            "|I_t| = {} exceeds μ I_n = {}",
-            i.t.abs(),
-            pb.mu * i.n
-        ));
-    }
     let sign_ok = match sol.kind {
         CollisionType::Sticking => v_s.t.abs() <= tol,
         CollisionType::ForwardSliding => v_s.t >= -tol,
         CollisionType::ReverseSliding => v_s.t <= tol,
     };
-    if !sign_ok {
-        return fail(format!(
+    let ok = i.n > 0.0
+        && i.n.is_finite()
+        && v_s.n >= -tol
+        && (v_s.n - v_a.n - wi.n).abs() <= tol
+        && (v_s.t - v_a.t - wi.t).abs() <= tol
+        && i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL)
+        && sign_ok;
+    if ok {
+        Ok(())
+    } else {
+        Err(incoherence(law, pb, sol, tol))
+    }
+}
+
+/// The error naming the first coherence condition that failed (the slow path).
+#[cold]
+#[inline(never)]
+fn incoherence(law: Law, pb: &ImpactProblem, sol: &LawSolution, tol: Real) -> ImpactError {
+    let (i, v_s, v_a) = (sol.impulse, sol.v_s, pb.v_a);
+    let wi = pb.w.apply(i);
+    let (r_n, r_t) = (v_s.n - v_a.n - wi.n, v_s.t - v_a.t - wi.t);
+    let detail = if !(i.n > 0.0 && i.n.is_finite()) {
+        format!("I_n = {} is not positive and finite", i.n)
+    } else if v_s.n < -tol {
+        format!("v_n^S = {} is negative", v_s.n)
+    } else if r_n.abs() > tol || r_t.abs() > tol {
+        format!("Eqs. (22)–(23) do not hold: residuals {r_n:e}, {r_t:e}")
+    } else if i.t.abs() > pb.mu * i.n * (1.0 + COHERENCE_TOL) {
+        format!("|I_t| = {} exceeds μ I_n = {}", i.t.abs(), pb.mu * i.n)
+    } else {
+        format!(
             "v_t^S = {} does not match the type {}",
             v_s.t,
             sol.kind.name()
-        ));
-    }
-    Ok(())
+        )
+    };
+    incoherent(law.name(), detail)
 }

@@ -50,11 +50,7 @@ pub fn collision_type(
 ///
 /// All three are derived again from Eqs. (22)–(23) and the phase conditions (46), (48),
 /// (51) in `tests/impact_laws.rs`, which checks Eqs. (22)–(23) on the result.
-pub fn solve(
-    pb: &ImpactProblem,
-    c: &Coefficients,
-    case: SignCase,
-) -> Result<LawSolution, super::ImpactError> {
+pub fn solve(pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
     let (e, mu) = (pb.e, pb.mu);
     let big_v = -pb.v_a.n;
     let vt = pb.v_a.t;
@@ -84,11 +80,12 @@ pub fn solve(
         }
     };
     let v_s = ContactVelocity::new(e * big_v, v_st);
-    let path = RouthPath::new(w, mu, pb.v_a);
-    Ok(LawSolution {
+    let path = RouthPath::with_coefficients(w, mu, pb.v_a, c);
+    LawSolution {
         kind,
         impulse,
         v_s,
         phases: path.phases_until(impulse.n).ending_at(impulse, v_s),
-    })
+        failure: None,
+    }
 }

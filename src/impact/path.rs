@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::coefficients::Coefficients;
 use super::outcome::CollisionType;
 use super::problem::{ContactVelocity, ImpactMatrix, Impulse};
 use crate::math::Real;
@@ -58,62 +59,95 @@ pub struct Phase {
     pub end: PathPoint,
 }
 
-/// The phases of a collision, one or two, stored inline.
+/// The phases of a collision, one or two, stored compactly: the end of each phase (the
+/// next one starts there; the first starts at the origin of the impulse plane, at the
+/// velocity of approach).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Phases {
-    len: usize,
-    items: [Phase; 2],
+    /// Velocity of approach: the contact velocity where the first phase starts (m/s).
+    v_a: ContactVelocity,
+    /// The end of each phase.
+    ends: [PathPoint; 2],
+    /// The slip mode of each phase.
+    kinds: [CollisionType; 2],
+    /// The number of phases, 1 or 2.
+    len: u8,
 }
 
 impl Phases {
-    /// A single phase.
-    pub fn one(phase: Phase) -> Self {
+    /// A single phase from the origin to `end`.
+    pub(super) fn one(v_a: ContactVelocity, kind: CollisionType, end: PathPoint) -> Self {
         Self {
+            v_a,
+            ends: [end, end],
+            kinds: [kind, kind],
             len: 1,
-            items: [phase, phase],
         }
     }
 
-    /// Two phases, in order.
-    pub fn two(first: Phase, second: Phase) -> Self {
+    /// Two phases: from the origin to `mid`, then to `end`.
+    pub(super) fn two(
+        v_a: ContactVelocity,
+        first: CollisionType,
+        mid: PathPoint,
+        second: CollisionType,
+        end: PathPoint,
+    ) -> Self {
         Self {
+            v_a,
+            ends: [mid, end],
+            kinds: [first, second],
             len: 2,
-            items: [first, second],
         }
+    }
+
+    /// The number of phases (1 or 2).
+    pub fn len(&self) -> usize {
+        usize::from(self.len)
+    }
+
+    /// Always false: a collision has at least one phase.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
     }
 
     /// The phases, in order.
-    pub fn as_slice(&self) -> &[Phase] {
-        &self.items[..self.len]
+    pub fn iter(&self) -> impl Iterator<Item = Phase> + '_ {
+        (0..self.len()).map(|k| Phase {
+            kind: self.kinds[k],
+            start: if k == 0 {
+                PathPoint {
+                    v: self.v_a,
+                    ..PathPoint::default()
+                }
+            } else {
+                self.ends[k - 1]
+            },
+            end: self.ends[k],
+        })
     }
 
     /// The end of the collision.
-    pub fn last(&self) -> &Phase {
-        &self.items[self.len - 1]
+    pub fn end(&self) -> &PathPoint {
+        &self.ends[self.len() - 1]
     }
 
     /// The same phases ending exactly at the impulse `i` and velocity `v` (a closed form's
     /// values, equal to the path's own end up to rounding).
     pub(super) fn ending_at(mut self, i: Impulse, v: ContactVelocity) -> Self {
-        let last = &mut self.items[self.len - 1].end;
-        last.i = i;
-        last.v = v;
+        let k = self.len() - 1;
+        self.ends[k].i = i;
+        self.ends[k].v = v;
         self
     }
 
-    /// The same phases in the frame whose tangent is `−t`.
-    pub(super) fn mirrored(&self) -> Self {
-        let flip = |p: PathPoint| PathPoint {
-            i: Impulse::new(p.i.n, -p.i.t),
-            v: ContactVelocity::new(p.v.n, -p.v.t),
-            ..p
-        };
-        let mut out = *self;
-        for ph in &mut out.items {
-            ph.start = flip(ph.start);
-            ph.end = flip(ph.end);
+    /// Mirrors the phases into the frame whose tangent is `−t`.
+    pub(super) fn mirror(&mut self) {
+        self.v_a.t = -self.v_a.t;
+        for p in &mut self.ends {
+            p.i.t = -p.i.t;
+            p.v.t = -p.v.t;
         }
-        out
     }
 }
 
@@ -149,11 +183,18 @@ impl RouthPath {
     /// - or reverse sliding (`L_RS`, Eq. 57) if `p < 0` (Eq. 60): `dĨ_t = μ dĨ_n`,
     ///   `dv_n = q dĨ_n`, `dv_t = p dĨ_n`.
     pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
+        Self::with_coefficients(w, mu, v_a, &Coefficients::new(w, mu, v_a))
+    }
+
+    /// [`RouthPath::new`] with g, h, p, q already computed.
+    pub fn with_coefficients(
+        w: &ImpactMatrix,
+        mu: Real,
+        v_a: ContactVelocity,
+        c: &Coefficients,
+    ) -> Self {
         debug_assert!(v_a.t >= 0.0, "the path is built in the paper's frame");
-        let g = mu * w.tt - w.nt;
-        let h = w.nn - mu * w.nt;
-        let p = mu * w.tt + w.nt;
-        let q = w.nn + mu * w.nt;
+        let (g, h, p, q) = (c.g, c.h, c.p, c.q);
         let origin = PathPoint {
             i: Impulse::default(),
             v: v_a,
@@ -287,30 +328,18 @@ impl RouthPath {
     /// the slip is zero from the start, is left out).
     pub fn phases_until(&self, i_n: Real) -> Phases {
         let end = self.at(i_n);
+        let v_a = self.origin.v;
         if i_n <= self.i_g {
-            Phases::one(Phase {
-                kind: CollisionType::ForwardSliding,
-                start: self.origin,
-                end,
-            })
+            Phases::one(v_a, CollisionType::ForwardSliding, end)
         } else if self.i_g == 0.0 {
-            Phases::one(Phase {
-                kind: self.after,
-                start: self.origin,
-                end,
-            })
+            Phases::one(v_a, self.after, end)
         } else {
             Phases::two(
-                Phase {
-                    kind: CollisionType::ForwardSliding,
-                    start: self.origin,
-                    end: self.at_g,
-                },
-                Phase {
-                    kind: self.after,
-                    start: self.at_g,
-                    end,
-                },
+                v_a,
+                CollisionType::ForwardSliding,
+                self.at_g,
+                self.after,
+                end,
             )
         }
     }

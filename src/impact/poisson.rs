@@ -1,8 +1,9 @@
 //! Poisson's kinetic hypothesis on Routh's path.
 
+use super::LawSolution;
+use super::coefficients::Coefficients;
 use super::path::RouthPath;
 use super::problem::ImpactProblem;
-use super::{LawSolution, incoherent};
 
 /// Solves the problem (paper's frame, `v_t^A ≥ 0`) under Poisson's hypothesis: the
 /// restitution impulse is `e` times the compression impulse, on Routh's path.
@@ -12,17 +13,19 @@ use super::{LawSolution, incoherent};
 /// path (phase 1: `I_c = V/h` if `h > 0` and `V/h ≤ Ĩ_n(G)`; else
 /// `I_c = Ĩ_n(G) + (0 − v_n(G)) / (dv_n/dĨ_n)`), and the collision ends at
 /// `I_n = (1 + e) I_c`, where the path gives `I_t`, `v^S` and the type.
-pub fn solve(pb: &ImpactProblem) -> Result<LawSolution, super::ImpactError> {
-    let path = RouthPath::new(&pb.w, pb.mu, pb.v_a);
-    let i_c = path
-        .reach_normal_velocity(0.0)
-        .ok_or_else(|| incoherent("poisson", "compression never ends".to_owned()))?;
+pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
+    let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
+    let Some(i_c) = path.reach_normal_velocity(0.0) else {
+        return LawSolution::failed("compression never ends");
+    };
     let i_n = (1.0 + pb.e) * i_c;
-    let end = path.at(i_n);
-    Ok(LawSolution {
+    let phases = path.phases_until(i_n);
+    let end = phases.end();
+    LawSolution {
         kind: path.kind_at(i_n),
         impulse: end.i,
         v_s: end.v,
-        phases: path.phases_until(i_n),
-    })
+        phases,
+        failure: None,
+    }
 }

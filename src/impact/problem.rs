@@ -170,19 +170,15 @@ impl ImpactProblem {
     /// Checks the data: finite numbers, `W` positive definite, `v_n^A < 0`,
     /// `e ∈ [0, 1]`, `μ ≥ 0`.
     pub fn validate(&self) -> Result<(), ImpactError> {
-        let named = [
-            ("m_nn", self.w.nn),
-            ("m_nt", self.w.nt),
-            ("m_tt", self.w.tt),
-            ("v_n^A", self.v_a.n),
-            ("v_t^A", self.v_a.t),
-            ("e", self.e),
-            ("μ", self.mu),
-        ];
-        for (what, value) in named {
-            if !value.is_finite() {
-                return Err(ImpactError::NonFinite { what, value });
-            }
+        let all_finite = self.w.nn.is_finite()
+            & self.w.nt.is_finite()
+            & self.w.tt.is_finite()
+            & self.v_a.n.is_finite()
+            & self.v_a.t.is_finite()
+            & self.e.is_finite()
+            & self.mu.is_finite();
+        if !all_finite {
+            return Err(self.first_non_finite());
         }
         let det = self.w.det();
         if !(self.w.nn > 0.0 && self.w.tt > 0.0 && det > MIN_RELATIVE_DET * self.w.nn * self.w.tt) {
@@ -203,5 +199,24 @@ impl ImpactProblem {
             return Err(ImpactError::NegativeFriction { mu: self.mu });
         }
         Ok(())
+    }
+
+    /// The error naming the first non-finite input (the slow path of `validate`).
+    #[cold]
+    fn first_non_finite(&self) -> ImpactError {
+        let named = [
+            ("m_nn", self.w.nn),
+            ("m_nt", self.w.nt),
+            ("m_tt", self.w.tt),
+            ("v_n^A", self.v_a.n),
+            ("v_t^A", self.v_a.t),
+            ("e", self.e),
+            ("μ", self.mu),
+        ];
+        let (what, value) = named
+            .into_iter()
+            .find(|(_, v)| !v.is_finite())
+            .unwrap_or(("?", Real::NAN));
+        ImpactError::NonFinite { what, value }
     }
 }

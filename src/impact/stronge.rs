@@ -1,8 +1,9 @@
 //! Stronge's energetic hypothesis on Routh's path.
 
+use super::LawSolution;
+use super::coefficients::Coefficients;
 use super::path::RouthPath;
 use super::problem::ImpactProblem;
-use super::{LawSolution, incoherent};
 
 /// Solves the problem (paper's frame, `v_t^A ≥ 0`) under Stronge's hypothesis: the work
 /// of the normal impulse during restitution is `e²` times minus its work during
@@ -13,21 +14,23 @@ use super::{LawSolution, incoherent};
 /// collision ends at the `I_n > I_c` with `∫_{I_c}^{I_n} v_n dĨ_n = −e² W_c`. On each
 /// phase `v_n = v_n0 + s x` is linear in the normal impulse `x` since the phase began, so
 /// the restitution work is `v_n0 x + ½ s x²`: a quadratic, solved phase by phase.
-pub fn solve(pb: &ImpactProblem) -> Result<LawSolution, super::ImpactError> {
-    let path = RouthPath::new(&pb.w, pb.mu, pb.v_a);
-    let i_c = path
-        .reach_normal_velocity(0.0)
-        .ok_or_else(|| incoherent("stronge", "compression never ends".to_owned()))?;
+pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
+    let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
+    let Some(i_c) = path.reach_normal_velocity(0.0) else {
+        return LawSolution::failed("compression never ends");
+    };
     let compression = path.at(i_c);
     let restitution_work = -pb.e * pb.e * compression.work_n;
-    let i_n = path
-        .reach_normal_work(&compression, restitution_work)
-        .ok_or_else(|| incoherent("stronge", "restitution work never reached".to_owned()))?;
-    let end = path.at(i_n);
-    Ok(LawSolution {
+    let Some(i_n) = path.reach_normal_work(&compression, restitution_work) else {
+        return LawSolution::failed("restitution work never reached");
+    };
+    let phases = path.phases_until(i_n);
+    let end = phases.end();
+    LawSolution {
         kind: path.kind_at(i_n),
         impulse: end.i,
         v_s: end.v,
-        phases: path.phases_until(i_n),
-    })
+        phases,
+        failure: None,
+    }
 }

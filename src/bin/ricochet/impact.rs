@@ -70,7 +70,7 @@ impl From<&Outcome> for Answer {
             law: out.law,
             kind: out.kind.name(),
             case: out.case.number(),
-            alpha: c.alpha,
+            alpha: c.alpha(),
             i_n: out.impulse.n,
             i_t: out.impulse.t,
             v_s: [out.v_s.n, out.v_s.t],
@@ -83,7 +83,6 @@ impl From<&Outcome> for Answer {
             q: c.q,
             phases: out
                 .phases
-                .as_slice()
                 .iter()
                 .map(|ph| PhaseEnd {
                     kind: ph.kind.name(),
