@@ -54,7 +54,7 @@ impl Time {
 
     /// This time in seconds since the epoch (s).
     pub fn as_seconds(self) -> f64 {
-        f64::from(self.sec) + f64::from(self.nsec) * 1e-9
+        f64::from(self.sec) + f64::from(self.nsec) / 1e9
     }
 }
 

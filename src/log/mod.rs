@@ -43,7 +43,8 @@ pub use records::{
 pub use schemas::Topic;
 pub use writer::{Compression, LogOptions, LogWriter};
 
-/// An error of the log layer.
+/// An error of the log layer. Causes are reported through `source()`, not repeated in the
+/// message (print the chain, e.g. with anyhow's `{:#}`).
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {
     /// A simulated time that cannot stamp a message.
@@ -63,7 +64,7 @@ pub enum LogError {
         field: String,
     },
     /// The log file could not be created.
-    #[error("cannot create the log file {path}: {source}")]
+    #[error("cannot create the log file {path}")]
     Create {
         /// The file.
         path: PathBuf,
@@ -71,7 +72,7 @@ pub enum LogError {
         source: std::io::Error,
     },
     /// The log file could not be read.
-    #[error("cannot read the log file {path}: {source}")]
+    #[error("cannot read the log file {path}")]
     Open {
         /// The file.
         path: PathBuf,
@@ -79,7 +80,7 @@ pub enum LogError {
         source: std::io::Error,
     },
     /// A message or metadata value that does not serialize to JSON.
-    #[error("cannot encode {what} as JSON: {source}")]
+    #[error("cannot encode {what} as JSON")]
     Encode {
         /// The topic or metadata record.
         what: &'static str,
@@ -93,7 +94,7 @@ pub enum LogError {
         what: &'static str,
     },
     /// A logged record that does not decode as the type of its topic.
-    #[error("cannot decode {what}: {source}")]
+    #[error("cannot decode {what}")]
     Decode {
         /// The topic or metadata field.
         what: String,
@@ -107,6 +108,6 @@ pub enum LogError {
         shape: String,
     },
     /// An error of the MCAP layer: I/O, or a file that is not MCAP.
-    #[error("MCAP: {0}")]
+    #[error("MCAP error")]
     Mcap(#[from] mcap::McapError),
 }

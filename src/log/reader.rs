@@ -131,7 +131,7 @@ pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
                     ))
                 })?;
                 *log.message_counts.entry(topic.clone()).or_default() += 1;
-                let t = header.log_time as f64 * 1e-9;
+                let t = header.log_time as f64 / 1e9;
                 log.time_range = Some(match log.time_range {
                     None => (t, t),
                     Some((a, b)) => (a.min(t), b.max(t)),

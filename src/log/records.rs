@@ -160,10 +160,10 @@ impl StateRecord {
         }
     }
 
-    /// The name of the first non-finite number, if any.
+    /// The name of the first non-finite number, if any, `t` aside (the writer checks times
+    /// on their own).
     pub(crate) fn first_non_finite(&self) -> Option<String> {
         let scalars = [
-            ("t", self.t),
             ("energy.kinetic", self.energy.kinetic),
             ("energy.potential", self.energy.potential),
             ("energy.total", self.energy.total),
@@ -319,10 +319,10 @@ impl ImpactRecord {
         }
     }
 
-    /// The name of the first non-finite number, if any.
+    /// The name of the first non-finite number, if any, `t` aside (the writer checks times
+    /// on their own).
     pub(crate) fn first_non_finite(&self) -> Option<String> {
         let scalars = [
-            ("t", self.t),
             ("alpha", self.alpha),
             ("w.mnn", self.w.mnn),
             ("w.mnt", self.w.mnt),

@@ -43,7 +43,7 @@ impl Default for LogOptions {
     fn default() -> Self {
         Self {
             compression: Compression::Lz4,
-            chunk_size: 256 * 1024,
+            chunk_size: 64 * 1024,
         }
     }
 }
