@@ -835,6 +835,69 @@ fn regenerate_fixture() {
     println!("wrote {FIXTURE} ({} bytes)", bytes.len());
 }
 
+/// The shipped Foxglove layout refers to topics, fields and frames that the log has.
+#[test]
+fn foxglove_layout_refers_to_what_is_logged() {
+    let text = std::fs::read_to_string(repo_path("foxglove/ricochet-layout.json")).unwrap();
+    let layout: Value = serde_json::from_str(&text).unwrap();
+    let panels = layout["configById"].as_object().unwrap();
+    let topic_names: Vec<&str> = Topic::ALL.iter().map(|t| t.name()).collect();
+    let mut kinds = vec![];
+    for (id, config) in panels {
+        let kind = id.split('!').next().unwrap();
+        kinds.push(kind);
+        match kind {
+            "3D" => {
+                assert_eq!(config["followTf"], draw::WORLD_FRAME);
+                for topic in config["topics"].as_object().unwrap().keys() {
+                    assert!(
+                        topic_names.contains(&topic.as_str()),
+                        "3D panel topic {topic}"
+                    );
+                }
+            }
+            "Plot" => {
+                for path in config["paths"].as_array().unwrap() {
+                    let path = path["value"].as_str().unwrap();
+                    let (topic, fields) = path.split_once('.').unwrap();
+                    let topic = Topic::from_name(topic).unwrap_or_else(|| panic!("{path}"));
+                    // Follow the fields through the topic's schema.
+                    let mut schema: Value = serde_json::from_str(topic.schema()).unwrap();
+                    for field in fields.split('.') {
+                        schema = schema["properties"][field].clone();
+                        assert!(!schema.is_null(), "plot path {path}: no field {field}");
+                    }
+                    assert_eq!(schema["type"], "number", "plot path {path}");
+                }
+            }
+            "RawMessages" => {
+                assert!(topic_names.contains(&config["topicPath"].as_str().unwrap()))
+            }
+            "RosOut" => assert_eq!(config["topicToRender"], Topic::Log.name()),
+            other => panic!("unexpected panel {other}"),
+        }
+    }
+    kinds.sort();
+    assert_eq!(kinds, ["3D", "Plot", "RawMessages", "RosOut"]);
+    // Every panel of the layout tree is configured, and every configured panel is placed.
+    fn leaves(node: &Value, out: &mut Vec<String>) {
+        match node {
+            Value::String(id) => out.push(id.clone()),
+            Value::Object(split) => {
+                leaves(&split["first"], out);
+                leaves(&split["second"], out);
+            }
+            other => panic!("bad layout node {other}"),
+        }
+    }
+    let mut placed = vec![];
+    leaves(&layout["layout"], &mut placed);
+    placed.sort();
+    let mut configured: Vec<String> = panels.keys().cloned().collect();
+    configured.sort();
+    assert_eq!(placed, configured);
+}
+
 #[test]
 fn inspect_prints_the_summary_of_a_run() {
     let bin = env!("CARGO_BIN_EXE_ricochet");
