@@ -119,9 +119,9 @@ impl ContactState {
 pub struct StateRecord {
     /// Simulated time (s), `≥ 0`; also the message's log time.
     pub t: f64,
-    /// Generalized coordinates `q` [n_q] (m for translations, rad for angles).
+    /// Generalized coordinates `q`, n_q entries (m for translations, rad for angles).
     pub q: Vec<f64>,
-    /// Generalized speeds `u` [n_u] (m/s, rad/s).
+    /// Generalized speeds `u`, n_u entries (m/s, rad/s).
     pub u: Vec<f64>,
     /// Energies at this instant (J).
     pub energy: Energy,
@@ -280,7 +280,7 @@ pub struct ImpactRecord {
     pub i_n: f64,
     /// Tangential impulse `I_t` (N·s) [P, Eq. (13)].
     pub i_t: f64,
-    /// Jump of the generalized speeds `Δu = M⁻¹ Jᵀ I` [n_u] (m/s, rad/s) [P, Eq. (16)].
+    /// Jump of the generalized speeds `Δu = M⁻¹ Jᵀ I`, n_u entries (m/s, rad/s) [P, Eq. (16)].
     pub delta_u: Vec<f64>,
     /// Mechanical energy just before the impact (J).
     pub energy_before: f64,

@@ -58,8 +58,9 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 /// created; each method then writes one message to its known channel, with
 /// `log_time = publish_time =` the simulated time in nanoseconds ([`nanoseconds`]: a time
 /// that is negative, NaN, infinite or beyond `2³²` s is refused with
-/// [`LogError::InvalidTime`]). Records holding a NaN or an infinity are refused with
-/// [`LogError::NonFinite`] (JSON has no such numbers).
+/// [`LogError::InvalidTime`]). Messages holding a NaN or an infinity are refused with
+/// [`LogError::NonFinite`] naming the field (JSON has no such numbers). A refused message
+/// is not written, and the writer stays usable.
 ///
 /// Ending a run: call [`finish`](LogWriter::finish), which writes the summary section and
 /// reports any I/O error. If the writer is dropped instead (an early return on error, a
@@ -182,11 +183,13 @@ impl<W: Write + Seek> LogWriter<W> {
     /// Writes a scene update on `/scene` at simulated time `t` (s). The entities carry their
     /// own timestamps, which the 3-D panel uses; normally they equal `t`.
     pub fn scene_update(&mut self, t: f64, update: &SceneUpdate) -> Result<(), LogError> {
+        check_finite(Topic::Scene, t, update)?;
         self.write(Topic::Scene, t, update)
     }
 
     /// Writes frame transforms on `/tf` at simulated time `t` (s).
     pub fn transforms(&mut self, t: f64, transforms: &FrameTransforms) -> Result<(), LogError> {
+        check_finite(Topic::Tf, t, transforms)?;
         self.write(Topic::Tf, t, transforms)
     }
 
@@ -243,6 +246,39 @@ impl<W: Write + Seek> LogWriter<W> {
             metadata: map,
         })?;
         Ok(())
+    }
+}
+
+/// Refuses a message with a NaN or an infinity, which `serde_json` would write as `null`
+/// (the Foxglove schemas have no nullable field, so `null` can only come from one).
+fn check_finite<M: Serialize>(topic: Topic, t: f64, message: &M) -> Result<(), LogError> {
+    let what = topic.name();
+    let json = serde_json::to_value(message).map_err(|source| LogError::Encode { what, source })?;
+    match first_null(&json) {
+        None => Ok(()),
+        Some(field) => Err(LogError::NonFinite { what, t, field }),
+    }
+}
+
+/// The path (`entities[0].cubes[1].size.x`) of the first `null` in `value`, if any.
+fn first_null(value: &serde_json::Value) -> Option<String> {
+    use serde_json::Value;
+    match value {
+        Value::Null => Some(String::new()),
+        Value::Array(items) => (items.iter().enumerate())
+            .find_map(|(i, v)| first_null(v).map(|rest| format!("[{i}]{}", dotted(&rest)))),
+        Value::Object(fields) => (fields.iter())
+            .find_map(|(k, v)| first_null(v).map(|rest| format!("{k}{}", dotted(&rest)))),
+        _ => None,
+    }
+}
+
+/// `rest` as the continuation of a path: `.x`, `[3]`, or nothing.
+fn dotted(rest: &str) -> String {
+    if rest.is_empty() || rest.starts_with('[') {
+        rest.to_owned()
+    } else {
+        format!(".{rest}")
     }
 }
 
