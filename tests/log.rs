@@ -442,6 +442,8 @@ fn topics_schemas_and_counts_read_back_with_the_mcap_crate() {
     assert_eq!(scene.metadata["text"], SCENE_TEXT);
 }
 
+/// Exact (bit-for-bit) decoding needs `serde_json/float_roundtrip`, which the
+/// `jsonschema` dev-dependency turns on for test builds.
 #[test]
 fn every_value_round_trips_exactly() {
     let run = synthetic();
