@@ -1,1 +1,113 @@
-//! Placeholder: filled in by its own issue.
+//! The MCAP log of a run: message types, the writer, the reader.
+//!
+//! A ricochet log is an MCAP file whose channels are all JSON-encoded with a `jsonschema`
+//! schema, stamped with *simulated* time (nanoseconds since `t = 0`):
+//!
+//! | topic | schema | content |
+//! |---|---|---|
+//! | `/state` | `ricochet.State` | [`StateRecord`]: `t`, `q[]`, `u[]`, `energy`, contact modes |
+//! | `/impacts` | `ricochet.Impact` | [`ImpactRecord`]: one entry of the impact ledger per impact |
+//! | `/scene` | `foxglove.SceneUpdate` | [`SceneUpdate`]: bodies, obstacles, impulse arrows ([`draw`]) |
+//! | `/tf` | `foxglove.FrameTransforms` | [`FrameTransforms`]: `world → body_<name>` |
+//! | `/log` | `foxglove.Log` | [`Log`]: warnings and mode changes |
+//!
+//! Metadata records make a log self-describing: `scene` (the scene's name and file text),
+//! `settings` (the run settings as JSON) and, when the run ends, `audit` (the [`Audit`]
+//! energy balance and stop reason). The schemas are embedded in the file, and shipped in
+//! `schemas/` (the Foxglove ones from npm `@foxglove/schemas`, MIT).
+//!
+//! Output is deterministic: no wall-clock time, host name or random id is written, so two
+//! identical runs give byte-identical files.
+//!
+//! - [`LogWriter`] writes a log (see its docs for finishing and interruption);
+//! - [`read`] reads one back, as far as it goes;
+//! - [`draw`] turns parry2d shapes and impacts into Foxglove scene entities.
+
+use std::path::PathBuf;
+
+pub mod draw;
+pub mod foxglove;
+mod reader;
+mod records;
+pub mod schemas;
+mod writer;
+
+pub use foxglove::{
+    FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate, Time,
+};
+pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
+pub use records::{
+    Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, ImpactType, InverseMass,
+    NormalTangent, Planar, StateRecord,
+};
+pub use schemas::Topic;
+pub use writer::{Compression, LogOptions, LogWriter};
+
+/// An error of the log layer. Causes are reported through `source()`, not repeated in the
+/// message (print the chain, e.g. with anyhow's `{:#}`).
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// A simulated time that cannot stamp a message.
+    #[error("invalid simulated time {t} s: log times must be finite, ≥ 0 and < 2³² s")]
+    InvalidTime {
+        /// The time (s).
+        t: f64,
+    },
+    /// A record holding a NaN or an infinity, which JSON cannot carry.
+    #[error("non-finite `{field}` in {what} at t = {t} s")]
+    NonFinite {
+        /// The topic or metadata record.
+        what: &'static str,
+        /// Simulated time of the record (s).
+        t: f64,
+        /// The first non-finite field, e.g. `q[2]`.
+        field: String,
+    },
+    /// The log file could not be created.
+    #[error("cannot create the log file {path}")]
+    Create {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The log file could not be read.
+    #[error("cannot read the log file {path}")]
+    Open {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A message or metadata value that does not serialize to JSON.
+    #[error("cannot encode {what} as JSON")]
+    Encode {
+        /// The topic or metadata record.
+        what: &'static str,
+        /// The cause.
+        source: serde_json::Error,
+    },
+    /// Settings or an audit that do not serialize to a JSON object.
+    #[error("{what} must serialize to a JSON object")]
+    NotAnObject {
+        /// The metadata record.
+        what: &'static str,
+    },
+    /// A logged record that does not decode as the type of its topic.
+    #[error("cannot decode {what}")]
+    Decode {
+        /// The topic or metadata field.
+        what: String,
+        /// The cause.
+        source: serde_json::Error,
+    },
+    /// A shape that [`draw::add_shape`] cannot draw.
+    #[error("cannot draw a parry2d {shape} shape")]
+    UnsupportedShape {
+        /// parry2d's name of the shape type.
+        shape: String,
+    },
+    /// An error of the MCAP layer: I/O, or a file that is not MCAP.
+    #[error("MCAP error")]
+    Mcap(#[from] mcap::McapError),
+}

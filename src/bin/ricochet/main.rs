@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod impact;
+mod inspect;
 
 /// Planar multibody simulator with event-driven rigid impacts.
 #[derive(Parser)]
@@ -18,12 +19,15 @@ struct Cli {
 enum Command {
     /// Solve one-point impact problems read as JSON Lines from standard input.
     Impact(impact::Args),
+    /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
+    Inspect(inspect::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Impact(args) => impact::run(args),
+        Command::Inspect(args) => inspect::run(args),
     };
     match result {
         Ok(code) => code,

@@ -1,0 +1,508 @@
+//! ricochet's own records: what is logged on `/state` and `/impacts`, and the energy audit
+//! written as metadata at the end of a run. Their JSON schemas are
+//! `schemas/ricochet/State.json` and `schemas/ricochet/Impact.json`; a field added here must
+//! be added there (the tests validate every record against its schema, and the schemas
+//! forbid unknown fields).
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::impact::Law;
+
+/// Energies of the system at one instant (J).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Energy {
+    /// Kinetic energy `½ uᵀ M(q) u` (J).
+    pub kinetic: f64,
+    /// Potential energy of gravity and springs (J), relative to the scene's datum.
+    pub potential: f64,
+    /// Total mechanical energy `kinetic + potential` (J).
+    pub total: f64,
+}
+
+impl Energy {
+    /// The energies with `total = kinetic + potential` (J).
+    pub fn new(kinetic: f64, potential: f64) -> Energy {
+        Energy {
+            kinetic,
+            potential,
+            total: kinetic + potential,
+        }
+    }
+}
+
+/// The state of one contact pair, or of the whole run.
+///
+/// Ordered from the least to the most constrained: `Free < Sliding < Sticking`, and
+/// `Impact` above them all, because at an impact instant the impact is what matters.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactMode {
+    /// Open: the gap is positive or the bodies separate (code 0).
+    #[default]
+    Free,
+    /// Closed and slipping: Coulomb friction at `μ λ_n` opposes the slip (code 1).
+    Sliding,
+    /// Closed and not slipping: the friction force is inside the cone (code 2).
+    Sticking,
+    /// An impact at this instant (code 3).
+    Impact,
+}
+
+impl ContactMode {
+    /// The name used in logs: `free`, `sliding`, `sticking`, `impact`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ContactMode::Free => "free",
+            ContactMode::Sliding => "sliding",
+            ContactMode::Sticking => "sticking",
+            ContactMode::Impact => "impact",
+        }
+    }
+
+    /// A number for the Plot panel: free 0, sliding 1, sticking 2, impact 3.
+    pub fn code(self) -> u8 {
+        match self {
+            ContactMode::Free => 0,
+            ContactMode::Sliding => 1,
+            ContactMode::Sticking => 2,
+            ContactMode::Impact => 3,
+        }
+    }
+
+    /// The mode of a run from the modes of its contacts: the most constrained one, or
+    /// `Free` when there are none.
+    pub fn of_run(contacts: impl IntoIterator<Item = ContactMode>) -> ContactMode {
+        contacts.into_iter().max().unwrap_or_default()
+    }
+}
+
+impl fmt::Display for ContactMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The state of one contact pair in a [`StateRecord`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactState {
+    /// Name of the pair, `<body_a>/<body_b>` (the world is `world`).
+    pub pair: String,
+    /// Mode of the pair.
+    pub mode: ContactMode,
+    /// `mode` as a number for the Plot panel (see [`ContactMode::code`]).
+    pub mode_code: u8,
+    /// Signed gap `g` (m): positive when apart, negative when penetrating.
+    pub gap: f64,
+}
+
+impl ContactState {
+    /// The state of `pair` in `mode` with the signed gap `gap` (m); fills `mode_code`.
+    pub fn new(pair: impl Into<String>, mode: ContactMode, gap: f64) -> ContactState {
+        ContactState {
+            pair: pair.into(),
+            mode,
+            mode_code: mode.code(),
+            gap,
+        }
+    }
+}
+
+/// One sample of the run (`ricochet.State` on `/state`).
+///
+/// Plot panel paths: `/state.energy.total`, `/state.q[0]`, `/state.u[1]`,
+/// `/state.mode_code`, `/state.contacts[0].gap`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StateRecord {
+    /// Simulated time (s), `≥ 0`; also the message's log time.
+    pub t: f64,
+    /// Generalized coordinates `q`, n_q entries (m for translations, rad for angles).
+    pub q: Vec<f64>,
+    /// Generalized speeds `u`, n_u entries (m/s, rad/s).
+    pub u: Vec<f64>,
+    /// Energies at this instant (J).
+    pub energy: Energy,
+    /// Mode of the run: the most constrained of the contacts' modes
+    /// ([`ContactMode::of_run`]).
+    pub mode: ContactMode,
+    /// `mode` as a number for the Plot panel.
+    pub mode_code: u8,
+    /// Every contact pair that the scene watches, in a fixed order.
+    pub contacts: Vec<ContactState>,
+    /// Number of impacts since the start of the run, including any at this instant.
+    pub impact_count: u64,
+}
+
+impl StateRecord {
+    /// A sample at time `t` (s); the run's `mode` and the mode codes are derived from
+    /// `contacts`.
+    pub fn new(
+        t: f64,
+        q: Vec<f64>,
+        u: Vec<f64>,
+        energy: Energy,
+        contacts: Vec<ContactState>,
+        impact_count: u64,
+    ) -> StateRecord {
+        let mode = ContactMode::of_run(contacts.iter().map(|c| c.mode));
+        StateRecord {
+            t,
+            q,
+            u,
+            energy,
+            mode,
+            mode_code: mode.code(),
+            contacts,
+            impact_count,
+        }
+    }
+
+    /// The name of the first non-finite number, if any, `t` aside (the writer checks times
+    /// on their own).
+    pub(crate) fn first_non_finite(&self) -> Option<String> {
+        let scalars = [
+            ("energy.kinetic", self.energy.kinetic),
+            ("energy.potential", self.energy.potential),
+            ("energy.total", self.energy.total),
+        ];
+        first_bad(&scalars)
+            .or_else(|| first_bad_in("q", &self.q))
+            .or_else(|| first_bad_in("u", &self.u))
+            .or_else(|| {
+                (self.contacts.iter().enumerate())
+                    .find(|(_, c)| !c.gap.is_finite())
+                    .map(|(i, _)| format!("contacts[{i}].gap"))
+            })
+    }
+}
+
+/// The outcome of the impact law in the classification of [P, Table 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ImpactType {
+    /// The tangential velocity vanishes during the collision and stays zero.
+    Sticking,
+    /// The tangential velocity vanishes and reverses its direction.
+    ReverseSliding,
+    /// The tangential velocity keeps its direction throughout.
+    ForwardSliding,
+}
+
+impl ImpactType {
+    /// The name used in logs: `sticking`, `reverse_sliding`, `forward_sliding`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ImpactType::Sticking => "sticking",
+            ImpactType::ReverseSliding => "reverse_sliding",
+            ImpactType::ForwardSliding => "forward_sliding",
+        }
+    }
+}
+
+impl fmt::Display for ImpactType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The entries `m_nn, m_nt, m_tt` of `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)]
+/// (1/kg for translations).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InverseMass {
+    /// `m_nn = n·W·n`.
+    pub mnn: f64,
+    /// `m_nt = n·W·t`.
+    pub mnt: f64,
+    /// `m_tt = t·W·t`.
+    pub mtt: f64,
+}
+
+/// A relative velocity in the contact frame (m/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct NormalTangent {
+    /// Normal component `v·n` (m/s).
+    pub n: f64,
+    /// Tangential component `v·t` (m/s).
+    pub t: f64,
+}
+
+/// A planar vector in the world frame (m, or dimensionless for a direction).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Planar {
+    /// x component in the world frame.
+    pub x: f64,
+    /// y component in the world frame.
+    pub y: f64,
+}
+
+/// One entry of the impact ledger (`ricochet.Impact` on `/impacts`).
+///
+/// The fields up to `work_t` are the contract of `DESIGN.md`; the rest are additions.
+/// Sign conventions as in the crate doc: `n` is oriented so that `v_a.n ≤ 0`, `t` so
+/// that `v_a.t ≥ 0` [P, Eq. (10)].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImpactRecord {
+    /// Simulated time of the impact (s), `≥ 0`; also the message's log time.
+    pub t: f64,
+    /// Name of the contact pair, `<body_a>/<body_b>`.
+    pub pair: String,
+    /// Name of the first body of the pair (`world` for a static obstacle).
+    pub body_a: String,
+    /// Name of the second body of the pair (`world` for a static obstacle).
+    pub body_b: String,
+    /// The impact law that solved the impact.
+    pub law: Law,
+    /// Sticking, reverse or forward sliding [P, Table 1].
+    #[serde(rename = "type")]
+    pub impact_type: ImpactType,
+    /// The sign case 1–5 of `(g, h, p, q)` [P, Table 1].
+    pub case: u8,
+    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)] (dimensionless).
+    pub alpha: f64,
+    /// `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)].
+    pub w: InverseMass,
+    /// `g = μ m_tt − m_nt` [P, Eq. (35)].
+    pub g: f64,
+    /// `h = m_nn − μ m_nt` [P, Eq. (35)].
+    pub h: f64,
+    /// `p = μ m_tt + m_nt` [P, Eq. (35)].
+    pub p: f64,
+    /// `q = m_nn + μ m_nt` [P, Eq. (35)].
+    pub q: f64,
+    /// Velocity of approach `v^A` in the contact frame (m/s) [P, Eq. (21)].
+    pub v_a: NormalTangent,
+    /// Velocity of separation `v^S` in the contact frame (m/s) [P, Eq. (21)].
+    pub v_s: NormalTangent,
+    /// Normal impulse `I_n ≥ 0` (N·s) [P, Eq. (13)].
+    pub i_n: f64,
+    /// Tangential impulse `I_t` (N·s) [P, Eq. (13)].
+    pub i_t: f64,
+    /// Jump of the generalized speeds `Δu = M⁻¹ Jᵀ I`, n_u entries (m/s, rad/s) [P, Eq. (16)].
+    pub delta_u: Vec<f64>,
+    /// Mechanical energy just before the impact (J).
+    pub energy_before: f64,
+    /// Mechanical energy just after the impact (J).
+    pub energy_after: f64,
+    /// `ΔE = ½ I_n (v_n^S + v_n^A) + ½ I_t (v_t^S + v_t^A)` (J) [P, Eq. (29)].
+    pub delta_e: f64,
+    /// Work of the normal impulse, `½ I_n (v_n^S + v_n^A)` (J).
+    pub work_n: f64,
+    /// Work of the tangential impulse, `½ I_t (v_t^S + v_t^A)` (J).
+    pub work_t: f64,
+    /// Index of the impact in the run, from 0.
+    pub index: u64,
+    /// Coefficient of restitution used by the law (dimensionless).
+    pub e: f64,
+    /// Coefficient of friction `μ` used by the law (dimensionless).
+    pub mu: f64,
+    /// The left-hand side of [P, Eq. (28)], the energy change due to prescribed motion
+    /// (J); zero without prescribed motion. `energy_after − energy_before = delta_e +
+    /// prescribed_work`.
+    pub prescribed_work: f64,
+    /// Contact point in the world frame (m).
+    pub point: Planar,
+    /// Unit contact normal `n` in the world frame.
+    pub normal: Planar,
+    /// Unit contact tangent `t` in the world frame.
+    pub tangent: Planar,
+}
+
+impl ImpactRecord {
+    /// The impulse `I_n n + I_t t` in the world frame (N·s).
+    pub fn impulse(&self) -> Planar {
+        Planar {
+            x: self.i_n * self.normal.x + self.i_t * self.tangent.x,
+            y: self.i_n * self.normal.y + self.i_t * self.tangent.y,
+        }
+    }
+
+    /// The name of the first non-finite number, if any, `t` aside (the writer checks times
+    /// on their own).
+    pub(crate) fn first_non_finite(&self) -> Option<String> {
+        let scalars = [
+            ("alpha", self.alpha),
+            ("w.mnn", self.w.mnn),
+            ("w.mnt", self.w.mnt),
+            ("w.mtt", self.w.mtt),
+            ("g", self.g),
+            ("h", self.h),
+            ("p", self.p),
+            ("q", self.q),
+            ("v_a.n", self.v_a.n),
+            ("v_a.t", self.v_a.t),
+            ("v_s.n", self.v_s.n),
+            ("v_s.t", self.v_s.t),
+            ("i_n", self.i_n),
+            ("i_t", self.i_t),
+            ("energy_before", self.energy_before),
+            ("energy_after", self.energy_after),
+            ("delta_e", self.delta_e),
+            ("work_n", self.work_n),
+            ("work_t", self.work_t),
+            ("e", self.e),
+            ("mu", self.mu),
+            ("prescribed_work", self.prescribed_work),
+            ("point.x", self.point.x),
+            ("point.y", self.point.y),
+            ("normal.x", self.normal.x),
+            ("normal.y", self.normal.y),
+            ("tangent.x", self.tangent.x),
+            ("tangent.y", self.tangent.y),
+        ];
+        first_bad(&scalars).or_else(|| first_bad_in("delta_u", &self.delta_u))
+    }
+}
+
+/// Work counters of a run, for the audit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Counters {
+    /// Impacts solved.
+    pub impacts: u64,
+    /// Accepted integration steps.
+    pub steps: u64,
+    /// Rejected integration steps.
+    pub rejected_steps: u64,
+    /// Evaluations of the right-hand side `u̇ = M⁻¹(τ − h)`.
+    pub rhs_evaluations: u64,
+    /// Events located (impacts, lift-offs, stick–slip transitions).
+    pub events: u64,
+    /// `/state` samples written.
+    pub state_samples: u64,
+}
+
+/// The energy audit of a run, written as the `audit` metadata record when the run ends.
+///
+/// The balance is `E_end − E_0 = impact_delta_e + applied_work + prescribed_work +
+/// integration_drift`: whatever the bookkeeping does not explain is drift of the
+/// integrator (or a bug).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Audit {
+    /// Why the run stopped: `t_end` when it reached its end time, `interrupted` on Ctrl-C,
+    /// otherwise the error or the event that stopped it.
+    pub stop_reason: String,
+    /// Simulated time at which the run stopped (s).
+    pub t_stop: f64,
+    /// Mechanical energy at `t = 0`, `E_0` (J).
+    pub energy_initial: f64,
+    /// Mechanical energy at `t_stop`, `E_end` (J).
+    pub energy_final: f64,
+    /// Sum of `delta_e` over the impacts (J), `≤ 0` unless [P, Eq. (28)] is violated.
+    pub impact_delta_e: f64,
+    /// Work of dampers and applied non-conservative forces between impacts (J).
+    pub applied_work: f64,
+    /// Work of prescribed (rheonomic) motion, including its share at impacts (J).
+    pub prescribed_work: f64,
+    /// `E_end − E_0 − (impact_delta_e + applied_work + prescribed_work)` (J): the energy
+    /// the bookkeeping does not explain. Set by [`Audit::new`].
+    pub integration_drift: f64,
+    /// Work counters.
+    pub counters: Counters,
+}
+
+impl Audit {
+    /// The audit with `integration_drift` computed from the balance.
+    pub fn new(
+        stop_reason: impl Into<String>,
+        t_stop: f64,
+        (energy_initial, energy_final): (f64, f64),
+        (impact_delta_e, applied_work, prescribed_work): (f64, f64, f64),
+        counters: Counters,
+    ) -> Audit {
+        let explained = impact_delta_e + applied_work + prescribed_work;
+        Audit {
+            stop_reason: stop_reason.into(),
+            t_stop,
+            energy_initial,
+            energy_final,
+            impact_delta_e,
+            applied_work,
+            prescribed_work,
+            integration_drift: energy_final - energy_initial - explained,
+            counters,
+        }
+    }
+
+    /// The name of the first non-finite number, if any.
+    pub(crate) fn first_non_finite(&self) -> Option<String> {
+        first_bad(&[
+            ("t_stop", self.t_stop),
+            ("energy_initial", self.energy_initial),
+            ("energy_final", self.energy_final),
+            ("impact_delta_e", self.impact_delta_e),
+            ("applied_work", self.applied_work),
+            ("prescribed_work", self.prescribed_work),
+            ("integration_drift", self.integration_drift),
+        ])
+    }
+}
+
+fn first_bad(values: &[(&str, f64)]) -> Option<String> {
+    (values.iter())
+        .find(|(_, v)| !v.is_finite())
+        .map(|(name, _)| (*name).to_owned())
+}
+
+fn first_bad_in(name: &str, values: &[f64]) -> Option<String> {
+    (values.iter())
+        .position(|v| !v.is_finite())
+        .map(|i| format!("{name}[{i}]"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_mode_is_the_most_constrained() {
+        use ContactMode::*;
+        assert_eq!(ContactMode::of_run([]), Free);
+        assert_eq!(ContactMode::of_run([Free, Sliding, Free]), Sliding);
+        assert_eq!(ContactMode::of_run([Sticking, Sliding]), Sticking);
+        assert_eq!(ContactMode::of_run([Sticking, Impact, Free]), Impact);
+    }
+
+    #[test]
+    fn audit_drift_closes_the_balance() {
+        let a = Audit::new(
+            "t_end",
+            2.0,
+            (10.0, 7.0),
+            (-2.5, -0.25, 0.0),
+            Counters::default(),
+        );
+        // 7 − 10 − (−2.5 − 0.25 + 0) = −0.25
+        assert_eq!(a.integration_drift, -0.25);
+    }
+
+    #[test]
+    fn non_finite_fields_are_named() {
+        let mut s = StateRecord::new(
+            0.0,
+            vec![1.0, 2.0],
+            vec![0.0],
+            Energy::new(1.0, 2.0),
+            vec![],
+            0,
+        );
+        assert_eq!(s.first_non_finite(), None);
+        s.q[1] = f64::NAN;
+        assert_eq!(s.first_non_finite().as_deref(), Some("q[1]"));
+        s.energy.total = f64::INFINITY;
+        assert_eq!(s.first_non_finite().as_deref(), Some("energy.total"));
+    }
+
+    #[test]
+    fn records_use_the_contract_names() {
+        let json =
+            serde_json::to_value(ContactState::new("a/b", ContactMode::Sticking, 0.0)).unwrap();
+        assert_eq!(json["mode"], "sticking");
+        assert_eq!(json["mode_code"], 2);
+        assert_eq!(
+            serde_json::to_value(ImpactType::ReverseSliding).unwrap(),
+            "reverse_sliding"
+        );
+    }
+}

@@ -1,0 +1,991 @@
+//! The MCAP log (`src/log/`): a synthetic run written with `LogWriter`, read back with the
+//! `mcap` crate (`Summary::read`, `MessageStream`) and with `ricochet::log::read`.
+//!
+//! The run: scene and settings metadata, a scene update drawing every shape kind, 100
+//! `/state` samples with their `/tf` transforms, 3 impacts with their impulse arrows, `/log`
+//! messages, a deletion, and the audit. Checked here: topics, schema names and encodings,
+//! message counts, exact round trip of every value, validation of every message against
+//! its shipped JSON schema, byte-identical output of two writes, reading a file cut short
+//! (a killed process), finishing on drop, rejection of invalid times, the committed
+//! fixture `tests/data/fixture.mcap`, and `ricochet inspect`.
+//!
+//! Regenerate the fixture with `bash tests/data/regenerate.sh`.
+
+use std::cell::RefCell;
+use std::collections::{BTreeMap, HashMap};
+use std::io::{Cursor, Seek, SeekFrom, Write};
+use std::path::PathBuf;
+use std::rc::Rc;
+
+use mcap::{MessageStream, Summary};
+use parry2d_f64::math::{Pose as Pose2, Vector};
+use parry2d_f64::shape::{
+    Ball, Capsule, ConvexPolygon, Cuboid, HalfSpace, Polyline, Segment, Shape, Triangle,
+};
+use ricochet::impact::Law;
+use ricochet::log::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
+use ricochet::log::foxglove::{
+    Color, DeletionType, ModelPrimitive, Pose, SceneEntityDeletion, SpherePrimitive, Vector3,
+};
+use ricochet::log::{
+    Audit, ContactMode, ContactState, Counters, Ending, Energy, FrameTransforms, ImpactRecord,
+    ImpactType, InverseMass, Log, LogError, LogLevel, LogOptions, LogWriter, NormalTangent, Planar,
+    SceneUpdate, StateRecord, Time, Topic,
+};
+use ricochet::settings::Settings;
+use serde_json::Value;
+
+// ---------------------------------------------------------------------------------------
+// The synthetic run
+
+/// One message of the run, in the order written.
+#[derive(Clone, Debug, PartialEq)]
+enum Event {
+    Scene(f64, SceneUpdate),
+    Tf(f64, FrameTransforms),
+    State(StateRecord),
+    Impact(Box<ImpactRecord>),
+    Log(f64, LogLevel, String),
+}
+
+struct Run {
+    scene_name: &'static str,
+    scene_text: &'static str,
+    settings: Settings,
+    events: Vec<Event>,
+    audit: Audit,
+}
+
+const N_STATES: usize = 100;
+const IMPACT_TIMES: [f64; 3] = [0.123, 0.456, 0.789];
+const SCENE_TEXT: &str = "version = 1\nname = \"synthetic\"\n\n[[body]]\nname = \"ball\"\nshape = { ball = { radius = 0.1 } }\n";
+
+const BLUE: Color = Color::rgba(0.2, 0.4, 0.9, 1.0);
+const GREY: Color = Color::rgba(0.5, 0.5, 0.5, 0.6);
+
+/// A scene update drawing every shape kind: bodies (ball, capsule, cuboid, convex polygon,
+/// triangle) in their frames, obstacles (half-space, segment, polyline) in `world`, plus a
+/// sphere and a model added by hand so that every primitive type of `SceneEntity` is
+/// validated.
+fn scene_at_start() -> SceneUpdate {
+    let style = DrawStyle::default();
+    let ball = Ball::new(0.1);
+    let rod = Capsule::new_x(0.4, 0.03);
+    let block = Cuboid::new(Vector::new(0.2, 0.1));
+    let wedge = ConvexPolygon::from_convex_polyline(vec![
+        Vector::new(0.0, 0.0),
+        Vector::new(0.3, 0.0),
+        Vector::new(0.0, 0.2),
+    ])
+    .unwrap();
+    let fin = Triangle::new(
+        Vector::new(0.0, 0.0),
+        Vector::new(0.1, 0.0),
+        Vector::new(0.0, 0.1),
+    );
+    let ground = HalfSpace::new(Vector::Y);
+    let wall = Segment::new(Vector::new(2.0, 0.0), Vector::new(2.0, 1.0));
+    let steps = Polyline::new(
+        vec![
+            Vector::new(-2.0, 0.3),
+            Vector::new(-1.5, 0.3),
+            Vector::new(-1.5, 0.0),
+        ],
+        None,
+    );
+    let id = Pose2::IDENTITY;
+    let mut entities = vec![
+        draw::body_entity(0.0, "ball", &[d(&ball, id, BLUE)], &style).unwrap(),
+        draw::body_entity(
+            0.0,
+            "rod",
+            &[d(&rod, Pose2::translation(0.4, 0.0), BLUE)],
+            &style,
+        )
+        .unwrap(),
+        draw::body_entity(
+            0.0,
+            "block",
+            &[
+                d(&block, id, BLUE),
+                d(&wedge, Pose2::new(Vector::new(0.2, 0.1), 0.5), BLUE),
+            ],
+            &style,
+        )
+        .unwrap(),
+        draw::body_entity(0.0, "fin", &[d(&fin, id, BLUE)], &style).unwrap(),
+        draw::obstacle_entity(0.0, "ground", &[d(&ground, id, GREY)], &style).unwrap(),
+        draw::obstacle_entity(0.0, "wall", &[d(&wall, id, GREY)], &style).unwrap(),
+        draw::obstacle_entity(0.0, "steps", &[d(&steps, id, GREY)], &style).unwrap(),
+    ];
+    entities[0].spheres.push(SpherePrimitive {
+        pose: Pose::planar(0.0, 0.0, 0.0),
+        size: Vector3::new(0.05, 0.05, 0.05),
+        color: BLUE,
+    });
+    entities[0].models.push(ModelPrimitive {
+        pose: Pose::planar(0.0, 0.0, 0.0),
+        scale: Vector3::new(1.0, 1.0, 1.0),
+        color: BLUE,
+        override_color: false,
+        url: String::new(),
+        media_type: "model/gltf-binary".to_owned(),
+        data: "AAAA".to_owned(),
+    });
+    SceneUpdate {
+        deletions: vec![],
+        entities,
+    }
+}
+
+fn d(shape: &dyn Shape, pose: Pose2, color: Color) -> ShapeDrawing<'_> {
+    ShapeDrawing { shape, pose, color }
+}
+
+/// Sample `i` of a ball bouncing on the ground: awkward binary fractions on purpose.
+fn state(i: usize) -> StateRecord {
+    let t = i as f64 * 0.01;
+    let y = 0.5 + 0.25 * (7.0 * t).cos();
+    let q = vec![0.1 * i as f64, y, t / 3.0];
+    let u = vec![0.1, -1.75 * (7.0 * t).sin(), 1.0 / 3.0];
+    let energy = Energy::new(0.5 * (u[0] * u[0] + u[1] * u[1]), 9.81 * y);
+    let mode = if i.is_multiple_of(10) {
+        ContactMode::Sliding
+    } else {
+        ContactMode::Free
+    };
+    let contacts = vec![
+        ContactState::new("ball/ground", mode, y - 0.1),
+        ContactState::new("ball/wall", ContactMode::Free, 2.0 - q[0] - 0.1),
+    ];
+    let impacts = IMPACT_TIMES.iter().filter(|&&ti| ti <= t).count() as u64;
+    StateRecord::new(t, q, u, energy, contacts, impacts)
+}
+
+/// Impact `k`, with the ledger fields consistent with each other.
+fn impact(k: usize) -> ImpactRecord {
+    let (mnn, mnt, mtt, mu, e) = (1.0, 0.2, 3.5, 0.3, 0.5);
+    let v_a = NormalTangent {
+        n: -2.0 - k as f64,
+        t: 0.7,
+    };
+    let i_n = 1.0242 + 0.1 * k as f64;
+    let i_t = -0.1143;
+    let v_s = NormalTangent {
+        n: -e * v_a.n,
+        t: 0.2 - 0.05 * k as f64,
+    };
+    let work_n = 0.5 * i_n * (v_s.n + v_a.n);
+    let work_t = 0.5 * i_t * (v_s.t + v_a.t);
+    let energy_before = 10.0 - k as f64;
+    ImpactRecord {
+        t: IMPACT_TIMES[k],
+        pair: "ball/ground".to_owned(),
+        body_a: "ball".to_owned(),
+        body_b: "world".to_owned(),
+        law: [Law::Newton, Law::KaneLevinson, Law::Stronge][k],
+        impact_type: [
+            ImpactType::Sticking,
+            ImpactType::ReverseSliding,
+            ImpactType::ForwardSliding,
+        ][k],
+        case: [1, 3, 5][k],
+        alpha: v_a.t / v_a.n.abs(),
+        w: InverseMass { mnn, mnt, mtt },
+        g: mu * mtt - mnt,
+        h: mnn - mu * mnt,
+        p: mu * mtt + mnt,
+        q: mnn + mu * mnt,
+        v_a,
+        v_s,
+        i_n,
+        i_t,
+        delta_u: vec![i_t, i_n, 0.1 * i_t],
+        energy_before,
+        energy_after: energy_before + work_n + work_t,
+        delta_e: work_n + work_t,
+        work_n,
+        work_t,
+        index: k as u64,
+        e,
+        mu,
+        prescribed_work: 0.0,
+        point: Planar {
+            x: 0.1 * k as f64,
+            y: 0.0,
+        },
+        normal: Planar { x: 0.0, y: 1.0 },
+        tangent: Planar { x: 1.0, y: 0.0 },
+    }
+}
+
+fn synthetic() -> Run {
+    let mut events = vec![
+        Event::Scene(0.0, scene_at_start()),
+        Event::Log(0.0, LogLevel::Info, "run started".to_owned()),
+    ];
+    let mut next_impact = 0;
+    for i in 0..N_STATES {
+        let s = state(i);
+        while next_impact < IMPACT_TIMES.len() && IMPACT_TIMES[next_impact] <= s.t {
+            let imp = impact(next_impact);
+            let arrow = draw::impulse_arrow(&imp, &ArrowStyle::default()).unwrap();
+            events.push(Event::Impact(Box::new(imp.clone())));
+            events.push(Event::Scene(
+                imp.t,
+                SceneUpdate {
+                    deletions: vec![],
+                    entities: vec![arrow],
+                },
+            ));
+            events.push(Event::Log(
+                imp.t,
+                LogLevel::Info,
+                format!("impact {next_impact}: {}", imp.impact_type),
+            ));
+            next_impact += 1;
+        }
+        let (x, y, theta) = (s.q[0], s.q[1], s.q[2]);
+        let tf =
+            draw::body_transforms(s.t, [("ball", Pose2::new(Vector::new(x, y), theta))]).unwrap();
+        events.push(Event::Tf(s.t, tf));
+        events.push(Event::State(s));
+    }
+    events.push(Event::Log(
+        0.5,
+        LogLevel::Warning,
+        "energy drift above 1e-6 J".to_owned(),
+    ));
+    let deletion = SceneEntityDeletion {
+        timestamp: Time::from_seconds(0.99).unwrap(),
+        deletion_type: DeletionType::MatchingId,
+        id: "impulse/0".to_owned(),
+    };
+    events.push(Event::Scene(
+        0.99,
+        SceneUpdate {
+            deletions: vec![deletion],
+            entities: vec![],
+        },
+    ));
+    let audit = Audit::new(
+        "t_end",
+        0.99,
+        (state(0).energy.total, state(N_STATES - 1).energy.total),
+        ((0..3).map(|k| impact(k).delta_e).sum(), -1.25e-3, 0.0),
+        Counters {
+            impacts: 3,
+            steps: 1234,
+            rejected_steps: 7,
+            rhs_evaluations: 7446,
+            events: 5,
+            state_samples: N_STATES as u64,
+        },
+    );
+    Run {
+        scene_name: "synthetic",
+        scene_text: SCENE_TEXT,
+        settings: Settings::default(),
+        events,
+        audit,
+    }
+}
+
+/// Writes the metadata and the first `n` events of `run`; the audit too when `n` is all.
+fn write_prefix<W: Write + Seek>(run: &Run, log: &mut LogWriter<W>, n: usize) {
+    log.scene(run.scene_name, run.scene_text).unwrap();
+    log.settings(&run.settings).unwrap();
+    for event in &run.events[..n] {
+        match event {
+            Event::Scene(t, update) => log.scene_update(*t, update).unwrap(),
+            Event::Tf(t, tf) => log.transforms(*t, tf).unwrap(),
+            Event::State(s) => log.state(s).unwrap(),
+            Event::Impact(i) => log.impact(i).unwrap(),
+            Event::Log(t, level, msg) => log.log(*t, *level, msg).unwrap(),
+        }
+    }
+    if n == run.events.len() {
+        log.audit(&run.audit).unwrap();
+    }
+}
+
+fn write_run(run: &Run, options: LogOptions) -> Vec<u8> {
+    let mut log = LogWriter::new(Cursor::new(Vec::new()), options).unwrap();
+    write_prefix(run, &mut log, run.events.len());
+    log.finish().unwrap().into_inner()
+}
+
+/// The topic and time (s) of an event, and its message as JSON.
+fn expected_message(event: &Event) -> (Topic, f64, Value) {
+    let json = |v: &dyn erased::Json| v.to_json();
+    match event {
+        Event::Scene(t, u) => (Topic::Scene, *t, json(u)),
+        Event::Tf(t, tf) => (Topic::Tf, *t, json(tf)),
+        Event::State(s) => (Topic::State, s.t, json(s)),
+        Event::Impact(i) => (Topic::Impacts, i.t, json(i)),
+        Event::Log(t, level, message) => (
+            Topic::Log,
+            *t,
+            json(&Log {
+                timestamp: Time::from_seconds(*t).unwrap(),
+                level: *level,
+                message: message.clone(),
+                name: "ricochet".to_owned(),
+                file: String::new(),
+                line: 0,
+            }),
+        ),
+    }
+}
+
+mod erased {
+    pub trait Json {
+        fn to_json(&self) -> serde_json::Value;
+    }
+    impl<T: serde::Serialize> Json for T {
+        fn to_json(&self) -> serde_json::Value {
+            serde_json::to_value(self).unwrap()
+        }
+    }
+}
+
+/// Exact nanoseconds of an event time: every time of the run is a whole number of
+/// milliseconds, computed here in integers, independently of the writer's rounding.
+fn exact_ns(t: f64) -> u64 {
+    let ms = (t * 1000.0).round() as u64;
+    assert!(
+        (ms as f64 / 1000.0 - t).abs() < 1e-12,
+        "{t} is not whole ms"
+    );
+    ms * 1_000_000
+}
+
+fn repo_path(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+fn tmp_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name)
+}
+
+/// A `Write + Seek` whose bytes can be looked at while a writer owns it: what a killed
+/// process leaves on disk (no user-space buffer).
+#[derive(Clone, Default)]
+struct SharedFile(Rc<RefCell<Cursor<Vec<u8>>>>);
+
+impl SharedFile {
+    fn snapshot(&self) -> Vec<u8> {
+        self.0.borrow().get_ref().clone()
+    }
+}
+
+impl Write for SharedFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Seek for SharedFile {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.0.borrow_mut().seek(pos)
+    }
+}
+
+fn count_events(events: &[Event], topic: Topic) -> u64 {
+    events
+        .iter()
+        .filter(|e| expected_message(e).0 == topic)
+        .count() as u64
+}
+
+// ---------------------------------------------------------------------------------------
+// Tests
+
+#[test]
+fn topics_schemas_and_counts_read_back_with_the_mcap_crate() {
+    let run = synthetic();
+    let bytes = write_run(&run, LogOptions::default());
+    let summary = Summary::read(&bytes).unwrap().expect("a summary section");
+
+    let expected: BTreeMap<&str, (&str, u64)> = BTreeMap::from([
+        ("/state", ("ricochet.State", N_STATES as u64)),
+        ("/impacts", ("ricochet.Impact", 3)),
+        ("/scene", ("foxglove.SceneUpdate", 1 + 3 + 1)),
+        ("/tf", ("foxglove.FrameTransforms", N_STATES as u64)),
+        ("/log", ("foxglove.Log", 1 + 3 + 1)),
+    ]);
+    let stats = summary.stats.as_ref().unwrap();
+    let mut seen = BTreeMap::new();
+    for (id, channel) in &summary.channels {
+        let schema = channel.schema.as_ref().expect("every channel has a schema");
+        assert_eq!(channel.message_encoding, "json");
+        assert_eq!(schema.encoding, "jsonschema");
+        let count = stats.channel_message_counts.get(id).copied().unwrap_or(0);
+        seen.insert(channel.topic.as_str(), (schema.name.as_str(), count));
+    }
+    assert_eq!(seen, expected);
+    assert_eq!(stats.message_count, 2 * N_STATES as u64 + 3 + 5 + 5);
+    assert_eq!(stats.message_start_time, 0);
+    assert_eq!(stats.message_end_time, 990_000_000);
+    let names: Vec<&str> = summary
+        .metadata_indexes
+        .iter()
+        .map(|m| m.name.as_str())
+        .collect();
+    assert_eq!(names, ["scene", "settings", "audit"]);
+    // Metadata records read through the summary's index.
+    let scene = mcap::read::metadata(&bytes, &summary.metadata_indexes[0]).unwrap();
+    assert_eq!(scene.metadata["name"], "synthetic");
+    assert_eq!(scene.metadata["text"], SCENE_TEXT);
+}
+
+/// Exact (bit-for-bit) decoding needs `serde_json/float_roundtrip`, which the
+/// `jsonschema` dev-dependency turns on for test builds.
+#[test]
+fn every_value_round_trips_exactly() {
+    let run = synthetic();
+    let bytes = write_run(&run, LogOptions::default());
+    let mut sequences: HashMap<String, u32> = HashMap::new();
+    let mut n = 0;
+    for (msg, event) in MessageStream::new(&bytes).unwrap().zip(&run.events) {
+        let msg = msg.unwrap();
+        let (topic, t, expected) = expected_message(event);
+        assert_eq!(msg.channel.topic, topic.name());
+        assert_eq!(msg.log_time, exact_ns(t), "log time of {event:?}");
+        assert_eq!(msg.publish_time, msg.log_time);
+        // Sequence numbers count up from 0 per channel.
+        let seq = sequences.entry(msg.channel.topic.clone()).or_default();
+        assert_eq!(msg.sequence, *seq);
+        *seq += 1;
+        let got: Value = serde_json::from_slice(&msg.data).unwrap();
+        assert_eq!(got, expected);
+        // Typed round trip, compared with the written value bit for bit (==).
+        match event {
+            Event::State(s) => assert_eq!(
+                &serde_json::from_slice::<StateRecord>(&msg.data).unwrap(),
+                s
+            ),
+            Event::Impact(i) => assert_eq!(
+                &serde_json::from_slice::<ImpactRecord>(&msg.data).unwrap(),
+                &**i
+            ),
+            Event::Scene(_, u) => assert_eq!(
+                &serde_json::from_slice::<SceneUpdate>(&msg.data).unwrap(),
+                u
+            ),
+            Event::Tf(_, tf) => assert_eq!(
+                &serde_json::from_slice::<FrameTransforms>(&msg.data).unwrap(),
+                tf
+            ),
+            Event::Log(..) => {
+                let log: Log = serde_json::from_slice(&msg.data).unwrap();
+                assert_eq!(log.timestamp.as_nanos(), msg.log_time);
+            }
+        }
+        n += 1;
+    }
+    assert_eq!(n, run.events.len());
+    // A few values by hand, independent of serde: t = 0.37 s is sec 0, nsec 370 000 000.
+    let tf = run.events.iter().find_map(|e| match e {
+        Event::Tf(t, tf) if (*t - 0.37).abs() < 1e-12 => Some(tf),
+        _ => None,
+    });
+    assert_eq!(
+        tf.unwrap().transforms[0].timestamp,
+        Time {
+            sec: 0,
+            nsec: 370_000_000
+        }
+    );
+}
+
+#[test]
+fn every_message_validates_against_its_shipped_schema() {
+    let run = synthetic();
+    let bytes = write_run(&run, LogOptions::default());
+    let summary = Summary::read(&bytes).unwrap().unwrap();
+    let mut validators = HashMap::new();
+    for channel in summary.channels.values() {
+        let schema = channel.schema.as_ref().unwrap();
+        // The embedded schema is the shipped file, byte for byte.
+        let file = match schema.name.as_str() {
+            "ricochet.State" => "schemas/ricochet/State.json",
+            "ricochet.Impact" => "schemas/ricochet/Impact.json",
+            "foxglove.SceneUpdate" => "schemas/foxglove/SceneUpdate.json",
+            "foxglove.FrameTransforms" => "schemas/foxglove/FrameTransforms.json",
+            "foxglove.Log" => "schemas/foxglove/Log.json",
+            other => panic!("unexpected schema {other}"),
+        };
+        assert_eq!(
+            &schema.data[..],
+            std::fs::read(repo_path(file)).unwrap(),
+            "{file}"
+        );
+        let json: Value = serde_json::from_slice(&schema.data).unwrap();
+        jsonschema::meta::validate(&json)
+            .unwrap_or_else(|e| panic!("{file} is not a valid schema: {e}"));
+        validators.insert(
+            channel.topic.clone(),
+            jsonschema::validator_for(&json).unwrap(),
+        );
+    }
+    let mut n = 0;
+    for msg in MessageStream::new(&bytes).unwrap() {
+        let msg = msg.unwrap();
+        let json: Value = serde_json::from_slice(&msg.data).unwrap();
+        let errors: Vec<String> = validators[&msg.channel.topic]
+            .iter_errors(&json)
+            .map(|e| format!("{} at {}", e, e.instance_path()))
+            .collect();
+        assert!(
+            errors.is_empty(),
+            "{} message {}: {errors:?}",
+            msg.channel.topic,
+            msg.sequence
+        );
+        n += 1;
+    }
+    assert_eq!(n, run.events.len());
+}
+
+#[test]
+fn schemas_reject_what_they_should() {
+    // The validation above is only worth something if the validators can fail.
+    let schema = |file: &str| -> jsonschema::Validator {
+        let json: Value = serde_json::from_slice(&std::fs::read(repo_path(file)).unwrap()).unwrap();
+        jsonschema::validator_for(&json).unwrap()
+    };
+    let state = serde_json::to_value(state(3)).unwrap();
+    let v = schema("schemas/ricochet/State.json");
+    assert!(v.is_valid(&state));
+    let mut missing = state.clone();
+    missing.as_object_mut().unwrap().remove("energy");
+    assert!(!v.is_valid(&missing), "a missing field");
+    let mut extra = state.clone();
+    extra["velocity"] = Value::from(1.0);
+    assert!(!v.is_valid(&extra), "an unknown field");
+    let mut bad_mode = state.clone();
+    bad_mode["contacts"][0]["mode"] = Value::from("rolling");
+    assert!(!v.is_valid(&bad_mode), "an unknown mode");
+    let mut negative_t = state;
+    negative_t["t"] = Value::from(-0.5);
+    assert!(!v.is_valid(&negative_t), "a negative time");
+
+    let v = schema("schemas/ricochet/Impact.json");
+    let imp = serde_json::to_value(impact(1)).unwrap();
+    assert!(v.is_valid(&imp));
+    let mut bad_case = imp.clone();
+    bad_case["case"] = Value::from(6);
+    assert!(!v.is_valid(&bad_case), "case 6");
+    let mut bad_law = imp;
+    bad_law["law"] = Value::from("hertz");
+    assert!(!v.is_valid(&bad_law), "an unknown law");
+
+    let v = schema("schemas/foxglove/SceneUpdate.json");
+    let scene = serde_json::to_value(scene_at_start()).unwrap();
+    assert!(v.is_valid(&scene));
+    let mut no_models = scene;
+    no_models["entities"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("models");
+    assert!(
+        !v.is_valid(&no_models),
+        "Foxglove requires every primitive list"
+    );
+}
+
+#[test]
+fn two_writes_are_byte_identical() {
+    let run = synthetic();
+    let a = write_run(&run, LogOptions::default());
+    let b = write_run(&synthetic(), LogOptions::default());
+    assert!(a == b, "two writes of the same run differ");
+    // Through a file as through memory.
+    let path = tmp_path("two_writes.mcap");
+    let mut log = LogWriter::create(&path, LogOptions::default()).unwrap();
+    write_prefix(&run, &mut log, run.events.len());
+    log.finish().unwrap();
+    assert!(
+        std::fs::read(&path).unwrap() == a,
+        "the file differs from the in-memory log"
+    );
+}
+
+/// With the `zstd` feature: zstd chunks (single-threaded) are deterministic and readable.
+#[cfg(feature = "zstd")]
+#[test]
+fn zstd_writes_are_byte_identical_and_readable() {
+    use ricochet::log::Compression;
+    let options = LogOptions {
+        compression: Compression::Zstd,
+        ..LogOptions::default()
+    };
+    let a = write_run(&synthetic(), options);
+    assert!(
+        a == write_run(&synthetic(), options),
+        "two zstd writes differ"
+    );
+    let read = ricochet::log::read_bytes(&a).unwrap();
+    assert_eq!(read.ending, Ending::Complete);
+    assert_eq!(read.count(Topic::State), N_STATES as u64);
+}
+
+#[test]
+fn reader_returns_metadata_impacts_and_counts() {
+    let run = synthetic();
+    let log = ricochet::log::read_bytes(&write_run(&run, LogOptions::default())).unwrap();
+    assert_eq!(log.ending, Ending::Complete);
+    assert_eq!(log.library, concat!("ricochet ", env!("CARGO_PKG_VERSION")));
+    let scene = log.scene.as_ref().unwrap();
+    assert_eq!(
+        (scene.name.as_str(), scene.text.as_str()),
+        ("synthetic", SCENE_TEXT)
+    );
+    let settings = Value::Object(log.settings.clone().unwrap());
+    assert_eq!(
+        serde_json::from_value::<Settings>(settings).unwrap(),
+        run.settings
+    );
+    assert_eq!(log.audit.as_ref(), Some(&run.audit));
+    assert_eq!(log.impacts, (0..3).map(impact).collect::<Vec<_>>());
+    assert_eq!(log.last_state, Some(state(N_STATES - 1)));
+    for topic in Topic::ALL {
+        assert_eq!(
+            log.count(topic),
+            count_events(&run.events, topic),
+            "{}",
+            topic.name()
+        );
+    }
+    assert_eq!(log.time_range, Some((0.0, 0.99)));
+}
+
+#[test]
+fn a_killed_writer_leaves_a_file_readable_up_to_its_last_flush() {
+    let run = synthetic();
+    // Kill the "process" after the 50th state sample and a flush, then write on without
+    // flushing: what is on disk holds exactly the flushed part.
+    let n_flushed = (run.events.iter())
+        .position(|e| matches!(e, Event::State(s) if (s.t - 0.49).abs() < 1e-12))
+        .unwrap()
+        + 1;
+    let file = SharedFile::default();
+    let mut log = LogWriter::new(file.clone(), LogOptions::default()).unwrap();
+    write_prefix(&run, &mut log, n_flushed);
+    log.flush().unwrap();
+    for event in &run.events[n_flushed..n_flushed + 20] {
+        if let Event::State(s) = event {
+            log.state(s).unwrap();
+        }
+    }
+    let on_disk = file.snapshot();
+    std::mem::forget(log); // killed: no drop, no finish
+
+    assert!(Summary::read(&on_disk).is_err(), "no footer, no summary");
+    let read = ricochet::log::read_bytes(&on_disk).unwrap();
+    assert!(
+        matches!(read.ending, Ending::Truncated { .. }),
+        "{:?}",
+        read.ending
+    );
+    assert_eq!(read.scene.as_ref().unwrap().name, "synthetic");
+    assert!(read.settings.is_some());
+    assert_eq!(read.audit, None, "the run did not end");
+    let flushed = &run.events[..n_flushed];
+    for topic in Topic::ALL {
+        assert_eq!(
+            read.count(topic),
+            count_events(flushed, topic),
+            "{}",
+            topic.name()
+        );
+    }
+    assert_eq!(read.count(Topic::State), 50);
+    assert_eq!(read.impacts, (0..2).map(impact).collect::<Vec<_>>());
+    assert_eq!(read.last_state, Some(state(49)));
+
+    // The mcap crate's MessageStream reads the same messages, then reports the cut.
+    let mut stream = MessageStream::new(&on_disk).unwrap();
+    let ok = stream.by_ref().take_while(|m| m.is_ok()).count();
+    assert_eq!(ok, n_flushed);
+}
+
+#[test]
+fn a_file_cut_anywhere_is_read_as_far_as_it_goes() {
+    let run = synthetic();
+    // Small chunks, so that a cut keeps many of them.
+    let options = LogOptions {
+        chunk_size: 2048,
+        ..LogOptions::default()
+    };
+    let bytes = write_run(&run, options);
+    let full = ricochet::log::read_bytes(&bytes).unwrap();
+    // The magic (8), the header record's opcode and length (9), its empty profile string
+    // (a u32 length) and its library string: the shortest prefix that is an MCAP file.
+    let header_end = 8 + 9 + 4 + 4 + full.library.len();
+    let mut totals = vec![];
+    for cut in (header_end..bytes.len()).step_by(97) {
+        let read = ricochet::log::read_bytes(&bytes[..cut])
+            .unwrap_or_else(|e| panic!("cut at {cut} of {}: {e}", bytes.len()));
+        assert!(
+            matches!(read.ending, Ending::Truncated { .. }),
+            "cut at {cut}"
+        );
+        let total: u64 = read.message_counts.values().sum();
+        assert!(
+            totals.last().is_none_or(|&p| total >= p),
+            "cut at {cut}: fewer messages than a shorter cut"
+        );
+        totals.push(total);
+        // What was read is a prefix of the run.
+        assert_eq!(read.impacts[..], full.impacts[..read.impacts.len()]);
+    }
+    // From nothing, through many partial reads, to everything once the cut is past the
+    // data section (in the summary section, which the reader does not need).
+    let all = run.events.len() as u64;
+    assert_eq!(totals.first(), Some(&0));
+    assert_eq!(totals.last(), Some(&all));
+    let partial: std::collections::BTreeSet<u64> = totals
+        .iter()
+        .copied()
+        .filter(|&n| 0 < n && n < all)
+        .collect();
+    assert!(
+        partial.len() > 10,
+        "only {} distinct partial reads",
+        partial.len()
+    );
+    // Not an MCAP file at all: an error.
+    assert!(ricochet::log::read_bytes(b"not an mcap file").is_err());
+}
+
+#[test]
+fn a_dropped_writer_still_finishes_the_file() {
+    let run = synthetic();
+    let file = SharedFile::default();
+    {
+        let mut log = LogWriter::new(file.clone(), LogOptions::default()).unwrap();
+        write_prefix(&run, &mut log, 30);
+        // Dropped here, as on an early return or a panic: mcap's Drop finishes the file.
+    }
+    let bytes = file.snapshot();
+    let summary = Summary::read(&bytes).unwrap().expect("a summary section");
+    assert_eq!(summary.stats.unwrap().message_count, 30);
+    let read = ricochet::log::read_bytes(&bytes).unwrap();
+    assert_eq!(read.ending, Ending::Complete);
+    assert_eq!(read.audit, None, "no audit: the run stopped early");
+}
+
+#[test]
+fn invalid_times_and_non_finite_values_are_errors() {
+    let mut log = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
+    for t in [-1e-9, -1.0, f64::NAN, f64::INFINITY, 5e9] {
+        let mut s = state(1);
+        s.t = t;
+        assert!(
+            matches!(log.state(&s), Err(LogError::InvalidTime { .. })),
+            "state at {t}"
+        );
+        assert!(matches!(
+            log.log(t, LogLevel::Info, "x"),
+            Err(LogError::InvalidTime { .. })
+        ));
+        assert!(matches!(
+            log.scene_update(t, &SceneUpdate::default()),
+            Err(LogError::InvalidTime { .. })
+        ));
+        assert!(matches!(
+            log.transforms(t, &FrameTransforms::default()),
+            Err(LogError::InvalidTime { .. })
+        ));
+        let mut i = impact(0);
+        i.t = t;
+        assert!(log.impact(&i).is_err(), "impact at {t}");
+    }
+    let mut s = state(2);
+    s.u[1] = f64::NAN;
+    match log.state(&s) {
+        Err(LogError::NonFinite { field, .. }) => assert_eq!(field, "u[1]"),
+        other => panic!("{other:?}"),
+    }
+    let mut i = impact(1);
+    i.delta_u[2] = f64::NEG_INFINITY;
+    assert!(matches!(log.impact(&i), Err(LogError::NonFinite { .. })));
+    let mut scene = scene_at_start();
+    scene.entities[2].cubes[0].size.y = f64::NAN;
+    match log.scene_update(0.0, &scene) {
+        Err(LogError::NonFinite { field, .. }) => assert_eq!(field, "entities[2].cubes[0].size.y"),
+        other => panic!("{other:?}"),
+    }
+    let mut tf = draw::body_transforms(0.0, [("ball", Pose2::IDENTITY)]).unwrap();
+    tf.transforms[0].rotation.z = f64::INFINITY;
+    match log.transforms(0.0, &tf) {
+        Err(LogError::NonFinite { field, .. }) => assert_eq!(field, "transforms[0].rotation.z"),
+        other => panic!("{other:?}"),
+    }
+    // The writer is still usable, and nothing rejected was written.
+    log.state(&state(3)).unwrap();
+    let bytes = log.finish().unwrap().into_inner();
+    let read = ricochet::log::read_bytes(&bytes).unwrap();
+    assert_eq!(read.message_counts.values().sum::<u64>(), 1);
+    assert_eq!(read.last_state, Some(state(3)));
+}
+
+/// The committed fixture, which older and newer readers alike must keep reading.
+const FIXTURE: &str = "tests/data/fixture.mcap";
+
+#[test]
+fn fixture_reads_back_and_matches_the_writer() {
+    let committed = std::fs::read(repo_path(FIXTURE)).unwrap();
+    let run = synthetic();
+    let read = ricochet::log::read_bytes(&committed).unwrap();
+    assert_eq!(read.ending, Ending::Complete);
+    assert_eq!(read.audit.as_ref(), Some(&run.audit));
+    assert_eq!(read.impacts.len(), 3);
+    assert_eq!(read.count(Topic::State), N_STATES as u64);
+    // Golden check of determinism across builds and machines.
+    let fresh = write_run(&run, LogOptions::default());
+    assert!(
+        committed == fresh,
+        "{FIXTURE} differs from a fresh write ({} vs {} bytes). If the log format changed on \
+         purpose, regenerate it: bash tests/data/regenerate.sh",
+        committed.len(),
+        fresh.len()
+    );
+}
+
+/// Rewrites the fixture: `cargo test --test log -- --ignored regenerate_fixture`.
+#[test]
+#[ignore = "writes tests/data/fixture.mcap"]
+fn regenerate_fixture() {
+    let bytes = write_run(&synthetic(), LogOptions::default());
+    std::fs::create_dir_all(repo_path("tests/data")).unwrap();
+    std::fs::write(repo_path(FIXTURE), &bytes).unwrap();
+    println!("wrote {FIXTURE} ({} bytes)", bytes.len());
+}
+
+/// The shipped Foxglove layout refers to topics, fields and frames that the log has.
+#[test]
+fn foxglove_layout_refers_to_what_is_logged() {
+    let text = std::fs::read_to_string(repo_path("foxglove/ricochet-layout.json")).unwrap();
+    let layout: Value = serde_json::from_str(&text).unwrap();
+    let panels = layout["configById"].as_object().unwrap();
+    let topic_names: Vec<&str> = Topic::ALL.iter().map(|t| t.name()).collect();
+    let mut kinds = vec![];
+    for (id, config) in panels {
+        let kind = id.split('!').next().unwrap();
+        kinds.push(kind);
+        match kind {
+            "3D" => {
+                assert_eq!(config["followTf"], draw::WORLD_FRAME);
+                for topic in config["topics"].as_object().unwrap().keys() {
+                    assert!(
+                        topic_names.contains(&topic.as_str()),
+                        "3D panel topic {topic}"
+                    );
+                }
+            }
+            "Plot" => {
+                for path in config["paths"].as_array().unwrap() {
+                    let path = path["value"].as_str().unwrap();
+                    let (topic, fields) = path.split_once('.').unwrap();
+                    let topic = Topic::from_name(topic).unwrap_or_else(|| panic!("{path}"));
+                    // Follow the fields through the topic's schema.
+                    let mut schema: Value = serde_json::from_str(topic.schema()).unwrap();
+                    for field in fields.split('.') {
+                        schema = schema["properties"][field].clone();
+                        assert!(!schema.is_null(), "plot path {path}: no field {field}");
+                    }
+                    assert_eq!(schema["type"], "number", "plot path {path}");
+                }
+            }
+            "RawMessages" => {
+                assert!(topic_names.contains(&config["topicPath"].as_str().unwrap()))
+            }
+            "RosOut" => assert_eq!(config["topicToRender"], Topic::Log.name()),
+            other => panic!("unexpected panel {other}"),
+        }
+    }
+    kinds.sort();
+    assert_eq!(kinds, ["3D", "Plot", "RawMessages", "RosOut"]);
+    // Every panel of the layout tree is configured, and every configured panel is placed.
+    fn leaves(node: &Value, out: &mut Vec<String>) {
+        match node {
+            Value::String(id) => out.push(id.clone()),
+            Value::Object(split) => {
+                leaves(&split["first"], out);
+                leaves(&split["second"], out);
+            }
+            other => panic!("bad layout node {other}"),
+        }
+    }
+    let mut placed = vec![];
+    leaves(&layout["layout"], &mut placed);
+    placed.sort();
+    let mut configured: Vec<String> = panels.keys().cloned().collect();
+    configured.sort();
+    assert_eq!(placed, configured);
+}
+
+#[test]
+fn inspect_prints_the_summary_of_a_run() {
+    let bin = env!("CARGO_BIN_EXE_ricochet");
+    let out = std::process::Command::new(bin)
+        .args(["inspect", FIXTURE])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for needle in [
+        "scene: synthetic",
+        "complete",
+        "output_rate",
+        "impacts: 3",
+        "reverse_sliding",
+        "kane-levinson",
+        "stop reason",
+        "t_end",
+        "integration drift",
+        "/state",
+    ] {
+        assert!(
+            stdout.contains(needle),
+            "`{needle}` missing from:\n{stdout}"
+        );
+    }
+    // One table row per impact, each starting with its time.
+    for t in ["0.123", "0.456", "0.789"] {
+        assert_eq!(
+            stdout
+                .lines()
+                .filter(|l| l.trim_start().starts_with(t))
+                .count(),
+            1,
+            "{t}:\n{stdout}"
+        );
+    }
+
+    // A file cut short in its data section: still a summary, and it says so.
+    let bytes = std::fs::read(repo_path(FIXTURE)).unwrap();
+    let data_end = mcap::read::footer(&bytes).unwrap().summary_start as usize;
+    let cut = tmp_path("inspect_cut.mcap");
+    std::fs::write(&cut, &bytes[..data_end / 2]).unwrap();
+    let out = std::process::Command::new(bin)
+        .arg("inspect")
+        .arg(&cut)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(out.status.success(), "{stdout}");
+    assert!(stdout.contains("truncated"), "{stdout}");
+    assert!(stdout.contains("no audit"), "{stdout}");
+}
