@@ -22,15 +22,14 @@ use parry2d_f64::math::{Pose as Pose2, Vector};
 use parry2d_f64::shape::{
     Ball, Capsule, ConvexPolygon, Cuboid, HalfSpace, Polyline, Segment, Shape, Triangle,
 };
-use ricochet::impact::Law;
+use ricochet::impact::{CollisionType, ContactVelocity, ImpactMatrix, Law};
 use ricochet::log::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
 use ricochet::log::foxglove::{
     Color, DeletionType, ModelPrimitive, Pose, SceneEntityDeletion, SpherePrimitive, Vector3,
 };
 use ricochet::log::{
-    Audit, ContactMode, ContactState, Counters, Ending, Energy, FrameTransforms, ImpactRecord,
-    ImpactType, InverseMass, Log, LogError, LogLevel, LogOptions, LogWriter, NormalTangent, Planar,
-    SceneUpdate, StateRecord, Time, Topic,
+    Audit, ContactMode, ContactState, Counters, Ending, Energy, FrameTransforms, ImpactRecord, Log,
+    LogError, LogLevel, LogOptions, LogWriter, Planar, SceneUpdate, StateRecord, Time, Topic,
 };
 use ricochet::settings::Settings;
 use serde_json::Value;
@@ -165,13 +164,13 @@ fn state(i: usize) -> StateRecord {
 /// Impact `k`, with the ledger fields consistent with each other.
 fn impact(k: usize) -> ImpactRecord {
     let (mnn, mnt, mtt, mu, e) = (1.0, 0.2, 3.5, 0.3, 0.5);
-    let v_a = NormalTangent {
+    let v_a = ContactVelocity {
         n: -2.0 - k as f64,
         t: 0.7,
     };
     let i_n = 1.0242 + 0.1 * k as f64;
     let i_t = -0.1143;
-    let v_s = NormalTangent {
+    let v_s = ContactVelocity {
         n: -e * v_a.n,
         t: 0.2 - 0.05 * k as f64,
     };
@@ -185,13 +184,13 @@ fn impact(k: usize) -> ImpactRecord {
         body_b: "world".to_owned(),
         law: [Law::Newton, Law::KaneLevinson, Law::Stronge][k],
         impact_type: [
-            ImpactType::Sticking,
-            ImpactType::ReverseSliding,
-            ImpactType::ForwardSliding,
+            CollisionType::Sticking,
+            CollisionType::ReverseSliding,
+            CollisionType::ForwardSliding,
         ][k],
         case: [1, 3, 5][k],
         alpha: v_a.t / v_a.n.abs(),
-        w: InverseMass { mnn, mnt, mtt },
+        w: ImpactMatrix::new(mnn, mnt, mtt),
         g: mu * mtt - mnt,
         h: mnn - mu * mnt,
         p: mu * mtt + mnt,

@@ -42,6 +42,12 @@ impl CollisionType {
     }
 }
 
+impl std::fmt::Display for CollisionType {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The solution of one impact problem, in the caller's frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outcome {

@@ -37,8 +37,7 @@ pub use foxglove::{
 };
 pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
 pub use records::{
-    Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, ImpactType, InverseMass,
-    NormalTangent, Planar, StateRecord,
+    Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, Planar, StateRecord,
 };
 pub use schemas::Topic;
 pub use writer::{Compression, LogOptions, LogWriter};

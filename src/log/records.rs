@@ -8,7 +8,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::impact::Law;
+use crate::impact::{CollisionType, ContactVelocity, ImpactMatrix, Law};
 
 /// Energies of the system at one instant (J).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -179,56 +179,6 @@ impl StateRecord {
     }
 }
 
-/// The outcome of the impact law in the classification of [P, Table 1].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ImpactType {
-    /// The tangential velocity vanishes during the collision and stays zero.
-    Sticking,
-    /// The tangential velocity vanishes and reverses its direction.
-    ReverseSliding,
-    /// The tangential velocity keeps its direction throughout.
-    ForwardSliding,
-}
-
-impl ImpactType {
-    /// The name used in logs: `sticking`, `reverse_sliding`, `forward_sliding`.
-    pub fn name(self) -> &'static str {
-        match self {
-            ImpactType::Sticking => "sticking",
-            ImpactType::ReverseSliding => "reverse_sliding",
-            ImpactType::ForwardSliding => "forward_sliding",
-        }
-    }
-}
-
-impl fmt::Display for ImpactType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// The entries `m_nn, m_nt, m_tt` of `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)]
-/// (1/kg for translations).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct InverseMass {
-    /// `m_nn = n·W·n`.
-    pub mnn: f64,
-    /// `m_nt = n·W·t`.
-    pub mnt: f64,
-    /// `m_tt = t·W·t`.
-    pub mtt: f64,
-}
-
-/// A relative velocity in the contact frame (m/s).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct NormalTangent {
-    /// Normal component `v·n` (m/s).
-    pub n: f64,
-    /// Tangential component `v·t` (m/s).
-    pub t: f64,
-}
-
 /// A planar vector in the world frame (m, or dimensionless for a direction).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Planar {
@@ -257,13 +207,13 @@ pub struct ImpactRecord {
     pub law: Law,
     /// Sticking, reverse or forward sliding [P, Table 1].
     #[serde(rename = "type")]
-    pub impact_type: ImpactType,
+    pub impact_type: CollisionType,
     /// The sign case 1–5 of `(g, h, p, q)` [P, Table 1].
     pub case: u8,
     /// `α = v_t^A / |v_n^A|` [P, Eq. (34)] (dimensionless).
     pub alpha: f64,
     /// `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)].
-    pub w: InverseMass,
+    pub w: ImpactMatrix,
     /// `g = μ m_tt − m_nt` [P, Eq. (35)].
     pub g: f64,
     /// `h = m_nn − μ m_nt` [P, Eq. (35)].
@@ -273,9 +223,9 @@ pub struct ImpactRecord {
     /// `q = m_nn + μ m_nt` [P, Eq. (35)].
     pub q: f64,
     /// Velocity of approach `v^A` in the contact frame (m/s) [P, Eq. (21)].
-    pub v_a: NormalTangent,
+    pub v_a: ContactVelocity,
     /// Velocity of separation `v^S` in the contact frame (m/s) [P, Eq. (21)].
-    pub v_s: NormalTangent,
+    pub v_s: ContactVelocity,
     /// Normal impulse `I_n ≥ 0` (N·s) [P, Eq. (13)].
     pub i_n: f64,
     /// Tangential impulse `I_t` (N·s) [P, Eq. (13)].
@@ -288,9 +238,10 @@ pub struct ImpactRecord {
     pub energy_after: f64,
     /// `ΔE = ½ I_n (v_n^S + v_n^A) + ½ I_t (v_t^S + v_t^A)` (J) [P, Eq. (29)].
     pub delta_e: f64,
-    /// Work of the normal impulse, `½ I_n (v_n^S + v_n^A)` (J).
+    /// Work of the normal impulse along the law's path in the impulse plane,
+    /// `∫ v_n dI_n` (J); `work_n + work_t = delta_e`.
     pub work_n: f64,
-    /// Work of the tangential impulse, `½ I_t (v_t^S + v_t^A)` (J).
+    /// Work of the tangential impulse along the law's path, `∫ v_t dI_t` (J).
     pub work_t: f64,
     /// Index of the impact in the run, from 0.
     pub index: u64,
@@ -324,9 +275,9 @@ impl ImpactRecord {
     pub(crate) fn first_non_finite(&self) -> Option<String> {
         let scalars = [
             ("alpha", self.alpha),
-            ("w.mnn", self.w.mnn),
-            ("w.mnt", self.w.mnt),
-            ("w.mtt", self.w.mtt),
+            ("w.mnn", self.w.nn),
+            ("w.mnt", self.w.nt),
+            ("w.mtt", self.w.tt),
             ("g", self.g),
             ("h", self.h),
             ("p", self.p),
@@ -501,7 +452,7 @@ mod tests {
         assert_eq!(json["mode"], "sticking");
         assert_eq!(json["mode_code"], 2);
         assert_eq!(
-            serde_json::to_value(ImpactType::ReverseSliding).unwrap(),
+            serde_json::to_value(CollisionType::ReverseSliding).unwrap(),
             "reverse_sliding"
         );
     }

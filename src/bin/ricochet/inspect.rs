@@ -107,7 +107,7 @@ fn ledger(out: &mut String, impacts: &[ImpactRecord]) {
                 format!("{:.6}", i.t),
                 i.pair.clone(),
                 i.law.to_string(),
-                i.impact_type.to_string(),
+                i.impact_type.name().to_owned(),
                 i.case.to_string(),
                 num(i.alpha),
                 num(i.i_n),
