@@ -110,3 +110,33 @@ pub(crate) fn require_non_negative(field: &'static str, value: Real) -> Result<(
         })
     }
 }
+
+impl IntegrateError<std::convert::Infallible> {
+    /// The same error with another right-hand-side error type (a system that cannot fail
+    /// produces none).
+    pub fn widen<E: std::error::Error + 'static>(self) -> IntegrateError<E> {
+        match self {
+            IntegrateError::Rhs { source, .. } => match source {},
+            IntegrateError::StepSizeTooSmall { t, h, h_min } => {
+                IntegrateError::StepSizeTooSmall { t, h, h_min }
+            }
+            IntegrateError::NonFinite { t } => IntegrateError::NonFinite { t },
+            IntegrateError::Dimension { expected, got } => {
+                IntegrateError::Dimension { expected, got }
+            }
+            IntegrateError::StopNotAhead { t, t_stop } => {
+                IntegrateError::StopNotAhead { t, t_stop }
+            }
+            IntegrateError::RestepOutOfRange {
+                t_target,
+                t_prev,
+                t_end,
+            } => IntegrateError::RestepOutOfRange {
+                t_target,
+                t_prev,
+                t_end,
+            },
+            IntegrateError::NotStarted => IntegrateError::NotStarted,
+        }
+    }
+}
