@@ -785,3 +785,37 @@ fn stepping_does_not_allocate() {
         assert!(s.counters().steps > 50);
     }
 }
+
+/// Stopping at output times costs at most about one extra step per stop: a step
+/// shortened to land on a stop time does not shrink the step-size suggestion.
+#[test]
+fn output_stops_do_not_degrade_the_step_size() {
+    let p = OSC;
+    let settings = Dopri5Settings {
+        rtol: 1e-10,
+        atol: 1e-10,
+        h_max: f64::INFINITY,
+        ..Default::default()
+    };
+    let mut plain = Dopri5::new(2, settings.clone()).unwrap();
+    run_to_end(&p, &mut plain);
+    let mut sys = system(&p);
+    let mut stopped = Dopri5::new(2, settings).unwrap();
+    stopped.start(&mut sys, p.t0, &exact(&p, p.t0)).unwrap();
+    let n_stops = 40;
+    for k in 1..=n_stops {
+        let t_stop = p.t1 * k as f64 / n_stops as f64;
+        while stopped.step(&mut sys, t_stop).unwrap() != StepOutcome::ReachedStop {}
+    }
+    let (a, b) = (plain.counters(), stopped.counters());
+    println!("no stops: {a:?}\n{n_stops} stops: {b:?}");
+    assert!(
+        b.steps <= a.steps + n_stops + 2,
+        "{} vs {}",
+        b.steps,
+        a.steps
+    );
+    assert!(b.rejected <= a.rejected + 2);
+    let err = max_abs_diff(stopped.y(), &exact(&p, p.t1));
+    assert!(err < 1e-8, "{err}");
+}

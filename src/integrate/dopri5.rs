@@ -483,9 +483,12 @@ impl Stepper for Dopri5 {
                 self.t = t1;
                 self.t_end = t1;
                 self.counters.steps += 1;
-                // A step shortened to reach t_stop says little about the step the
-                // solution allows: keep the larger of the two suggestions.
-                self.h = if h < self.h {
+                // A step shortened to land on t_stop says little about the step the
+                // solution allows (its growth is clamped at fac_max): keep the larger of
+                // the two suggestions. A step capped by h_max informs the controller as
+                // usual.
+                let shortened_for_stop = reaches && h < self.h.min(self.h_max);
+                self.h = if shortened_for_stop {
                     verdict.h_new.max(self.h)
                 } else {
                     verdict.h_new
