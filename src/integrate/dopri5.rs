@@ -248,7 +248,14 @@ pub(crate) fn all_finite(v: &[Real]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-/// The Dormand–Prince 5(4) integrator with dense output; see the [module](self) docs.
+/// DOPRI5(4): the Dormand–Prince 5(4) pair with FSAL, PI step-size control, a maximum
+/// step and Shampine's continuous extension of order 4 [HNW, II.4–6; J. R. Dormand,
+/// P. J. Prince, J. Comput. Appl. Math. 6, 19–26 (1980); L. F. Shampine, Math. Comp. 46,
+/// 135–150 (1986)]; the tableau is in [`tableau`](crate::integrate::tableau).
+///
+/// Cost: 6 evaluations of `f` per accepted or rejected step (stage 1 is the previous
+/// step's stage 7); at `start` 1, plus 1 for the initial step guess when `h_init` is not
+/// given; 6 per re-step; 1 per reset.
 ///
 /// ```
 /// use ricochet::integrate::{Dopri5, Dopri5Settings, FnSystem, StepOutcome, Stepper};
