@@ -1,10 +1,69 @@
 //! Time integration of `ẏ = f(t, y)`: DOPRI5(4) with dense output, RK4 with a fixed step.
 //! This module knows nothing about bodies or contacts.
+//!
+//! - [`OdeSystem`]: the system, whose right-hand side may fail.
+//! - [`Stepper`]: one accepted step at a time, the continuous extension (dense output) of
+//!   the last step, a re-step to an event time at full order, a reset at an impact, a cap
+//!   on the step, and work [`Counters`]. Implemented by [`Dopri5`] [HNW, II.4–6;
+//!   Dormand & Prince 1980; Shampine 1986] and [`Rk4`] [HNW, II.1], and by
+//!   [`AnyStepper`] which picks one from the run's [`Method`].
+//! - Event location on the dense output lives in [`crate::events`]; the reset (impact) map
+//!   stays with the simulation loop.
+//!
+//! Every vector is allocated when a stepper is built (or when `start` meets a system of
+//! another dimension); a step allocates nothing.
+//!
+//! Why our own DOPRI5 rather than a crate: `notes/crates.md` §3d (event semantics for
+//! impacts, a maximum step, re-stepping to the event).
+//!
+//! # Driving a stepper
+//!
+//! ```
+//! use ricochet::integrate::{Dopri5, Dopri5Settings, FnSystem, StepOutcome, Stepper};
+//! // Harmonic oscillator ẍ = −x, x(0) = 1, ẋ(0) = 0.
+//! let mut sys = FnSystem::new(2, |_t, y: &[f64], dy: &mut [f64]| {
+//!     dy[0] = y[1];
+//!     dy[1] = -y[0];
+//! });
+//! let settings = Dopri5Settings { rtol: 1e-9, atol: 1e-12, h_max: 0.5, ..Default::default() };
+//! let mut stepper = Dopri5::new(2, settings)?;
+//! stepper.start(&mut sys, 0.0, &[1.0, 0.0])?;
+//! let mut x = [0.0; 2];
+//! loop {
+//!     let outcome = stepper.step(&mut sys, 3.0)?;
+//!     // The last step is [t_prev, t]; its continuous extension is available.
+//!     let t_mid = 0.5 * (stepper.t_prev() + stepper.t());
+//!     stepper.dense(t_mid, &mut x);
+//!     assert!((x[0] - t_mid.cos()).abs() < 1e-8);
+//!     if outcome == StepOutcome::ReachedStop {
+//!         break;
+//!     }
+//! }
+//! assert_eq!(stepper.t(), 3.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::fmt;
 use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
+
+mod any;
+mod control;
+mod dense;
+mod dopri5;
+mod error;
+mod rk4;
+mod stepper;
+mod system;
+pub mod tableau;
+
+pub use any::AnyStepper;
+pub use dopri5::{Dopri5, Dopri5Settings};
+pub use error::{IntegrateError, SettingsError};
+pub use rk4::{Rk4, Rk4Settings};
+pub use stepper::{Counters, StepOutcome, Stepper};
+pub use system::{FnSystem, OdeSystem};
 
 /// The time-integration method of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

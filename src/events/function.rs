@@ -1,0 +1,127 @@
+//! The event functions: `m` scalar functions `gᵢ(t, y)` whose closing crossings
+//! (from `g > 0` to `g ≤ 0`) are events, and optionally their time derivatives.
+
+use crate::math::Real;
+
+/// `m` event functions `gᵢ(t, y)`, evaluated together (the simulation loop computes the
+/// signed gaps of all contact pairs from `y`). `gᵢ > 0` means separated.
+///
+/// [`rates`](EventFunctions::rates) may supply `ġᵢ = ∂gᵢ/∂t + ∇gᵢ · ẏ`; for a gap this is
+/// the normal velocity, cheap to compute from `y` alone. Without it the locator
+/// differentiates `g` along the dense output numerically (one more evaluation of
+/// [`values`](EventFunctions::values) per sample).
+///
+/// Closures `FnMut(t, y, g) -> Result<(), E>` implement this trait (values only); see
+/// also [`FnEvents`].
+pub trait EventFunctions {
+    /// The error of a failing evaluation (e.g. an unsupported shape pair).
+    type Error: std::error::Error + 'static;
+
+    /// Writes `gᵢ(t, y)`, `i = 0 … m−1`, into `g`.
+    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Self::Error>;
+
+    /// Writes `ġᵢ(t, y)` into `g_dot` given `ẏ = dy` and returns `Ok(true)`, or returns
+    /// `Ok(false)` if the rates are not available (the default).
+    fn rates(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        dy: &[Real],
+        g_dot: &mut [Real],
+    ) -> Result<bool, Self::Error> {
+        let _ = (t, y, dy, g_dot);
+        Ok(false)
+    }
+}
+
+impl<F, E> EventFunctions for F
+where
+    F: FnMut(Real, &[Real], &mut [Real]) -> Result<(), E>,
+    E: std::error::Error + 'static,
+{
+    type Error = E;
+
+    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), E> {
+        self(t, y, g)
+    }
+}
+
+/// The signature of an infallible rates closure `ġ(t, y, ẏ, out)`.
+pub type RatesFn = fn(Real, &[Real], &[Real], &mut [Real]);
+
+/// [`EventFunctions`] from infallible closures: `values(t, y, g)` and, optionally,
+/// `rates(t, y, ẏ, ġ)`.
+///
+/// ```
+/// use ricochet::events::{EventFunctions, FnEvents};
+/// // A ball's height above the floor y = (height, velocity), and its rate.
+/// let mut gap = FnEvents::with_rates(
+///     |_t, y: &[f64], g: &mut [f64]| g[0] = y[0],
+///     |_t, y: &[f64], _dy: &[f64], g_dot: &mut [f64]| g_dot[0] = y[1],
+/// );
+/// let (mut g, mut g_dot) = ([0.0], [0.0]);
+/// gap.values(0.0, &[2.0, -1.0], &mut g).unwrap();
+/// assert!(gap.rates(0.0, &[2.0, -1.0], &[-1.0, -9.81], &mut g_dot).unwrap());
+/// assert_eq!((g, g_dot), ([2.0], [-1.0]));
+/// ```
+#[derive(Clone, Debug)]
+pub struct FnEvents<G, R = RatesFn> {
+    values: G,
+    rates: Option<R>,
+}
+
+impl<G> FnEvents<G>
+where
+    G: FnMut(Real, &[Real], &mut [Real]),
+{
+    /// Values only: the locator differentiates numerically where it needs `ġ`.
+    pub fn new(values: G) -> Self {
+        Self {
+            values,
+            rates: None,
+        }
+    }
+}
+
+impl<G, R> FnEvents<G, R>
+where
+    G: FnMut(Real, &[Real], &mut [Real]),
+    R: FnMut(Real, &[Real], &[Real], &mut [Real]),
+{
+    /// Values and rates.
+    pub fn with_rates(values: G, rates: R) -> Self {
+        Self {
+            values,
+            rates: Some(rates),
+        }
+    }
+}
+
+impl<G, R> EventFunctions for FnEvents<G, R>
+where
+    G: FnMut(Real, &[Real], &mut [Real]),
+    R: FnMut(Real, &[Real], &[Real], &mut [Real]),
+{
+    type Error = std::convert::Infallible;
+
+    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Self::Error> {
+        (self.values)(t, y, g);
+        Ok(())
+    }
+
+    fn rates(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        dy: &[Real],
+        g_dot: &mut [Real],
+    ) -> Result<bool, Self::Error> {
+        match &mut self.rates {
+            Some(r) => {
+                r(t, y, dy, g_dot);
+                Ok(true)
+            }
+            None => Ok(false),
+        }
+    }
+}

@@ -1,0 +1,553 @@
+//! Locating the earliest closing event of the last step on its dense output.
+
+use super::illinois::{Probe, Solved, illinois};
+use super::{EventError, EventFunctions};
+use crate::integrate::Stepper;
+use crate::math::Real;
+
+/// Settings of the [`EventLocator`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct LocatorSettings {
+    /// Interior sample points per step, `k`: the step is split into `k + 1` equal parts
+    /// whose ends bracket sign changes (default 4).
+    pub samples: usize,
+    /// Absolute time tolerance of a root (s), added to `4 ε |t|` (default 0: the root is
+    /// bracketed to 4 ulp).
+    pub t_tol: Real,
+    /// Events of different functions within this time of the earliest are reported
+    /// together (s, default 1e-9).
+    pub simultaneity: Real,
+    /// Search the extremum of `g` between two samples when `ġ` changes sign there, to
+    /// find dips below zero between positive samples (grazing, thin or fast obstacles)
+    /// and bounces between non-positive samples (default true). Off: only sign changes at
+    /// the samples are seen.
+    pub extremum_search: bool,
+    /// Iteration budget of one root or extremum search (default 200).
+    pub max_iter: usize,
+}
+
+impl Default for LocatorSettings {
+    fn default() -> Self {
+        Self {
+            samples: 4,
+            t_tol: 0.0,
+            simultaneity: 1e-9,
+            extremum_search: true,
+            max_iter: 200,
+        }
+    }
+}
+
+/// How an event was found; the kinds differ in what `[t_lo, t_hi]` means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EventKind {
+    /// `g > 0` at a sample and `g ≤ 0` at the next: the root is bracketed,
+    /// `g(t_lo) > 0 ≥ g(t_hi)` on the dense output, `t = t_hi`.
+    Crossing,
+    /// `g > 0` at two consecutive samples, but the minimum of `g` between them (where `ġ`
+    /// changes sign from − to +) is `≤ 0`: grazing, or a thin or fast obstacle. Bracket
+    /// as for `Crossing`.
+    Grazing,
+    /// `g ≤ 0` at two consecutive samples (the function started the step at contact,
+    /// opening), but its maximum between them is `> 0`: a bounce shorter than a sample
+    /// interval, ending in a closing crossing. Bracket as for `Crossing`.
+    Bounce,
+    /// `g(t_prev) ≤ 0` and closing there (`ġ < 0`, or `ġ = 0` and `g` decreasing): a
+    /// root exactly at the step's start, or a contact that does not open.
+    /// `t = t_lo = t_hi = t_prev`. The loop decides what it means.
+    AtStart,
+    /// `g ≤ 0` at the start and opening, but `g` turns to closing again without becoming
+    /// positive (a separation below the resolution of `g`). `t = t_hi` is just after
+    /// the maximum of `g`, `[t_lo, t_hi]` brackets the maximum, and `g(t) ≤ 0`.
+    Reclosing,
+}
+
+/// One event: the function, how it was found, its time and bracket (s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Event {
+    /// Index `i` of the event function.
+    pub index: usize,
+    /// How it was found.
+    pub kind: EventKind,
+    /// The event time: the post-event end of the bracket, `t_hi` (s).
+    pub t: Real,
+    /// Lower end of the bracket (s).
+    pub t_lo: Real,
+    /// Upper end of the bracket (s).
+    pub t_hi: Real,
+}
+
+/// Work of the locator since it was built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct LocatorCounters {
+    /// Calls of [`EventLocator::locate`] on non-empty steps.
+    pub calls: u64,
+    /// Evaluations of all `m` event functions (`values`), samples and iterations.
+    pub value_evals: u64,
+    /// Evaluations of the rates supplied by the caller.
+    pub rate_evals: u64,
+}
+
+/// The samples of one step: times, values and rates of all functions.
+#[derive(Clone, Debug)]
+struct Samples {
+    /// `k + 2` times, `t_prev` … `t` (s).
+    ts: Vec<Real>,
+    /// `g[j m + i]`: function `i` at sample `j`.
+    gs: Vec<Real>,
+    /// `ġ[j m + i]`, valid where `known[j]`.
+    gds: Vec<Real>,
+    known: Vec<bool>,
+}
+
+/// Scratch vectors for one evaluation.
+#[derive(Clone, Debug)]
+pub(crate) struct Scratch {
+    y: Vec<Real>,
+    dy: Vec<Real>,
+    y2: Vec<Real>,
+    pub(crate) g: Vec<Real>,
+    pub(crate) gd: Vec<Real>,
+    g2: Vec<Real>,
+}
+
+/// Finds the earliest closing event of any armed function inside the last step of a
+/// [`Stepper`], on its dense output; see the [module](super) docs for the semantics and
+/// the limits. All vectors are allocated in [`new`](EventLocator::new).
+#[derive(Clone, Debug)]
+pub struct EventLocator {
+    pub(crate) settings: LocatorSettings,
+    n: usize,
+    m: usize,
+    samples: Samples,
+    pub(crate) scratch: Scratch,
+    done: Vec<bool>,
+    found: Vec<Event>,
+    pub(crate) counters: LocatorCounters,
+}
+
+/// Evaluates the event functions on the dense output of the last step.
+pub(crate) struct Sampler<'a, St, G> {
+    pub(crate) stepper: &'a St,
+    pub(crate) funcs: &'a mut G,
+    pub(crate) s: &'a mut Scratch,
+    pub(crate) counters: &'a mut LocatorCounters,
+}
+
+impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
+    /// The state at `t` into `y`: the stored ends of the step exactly, the dense output
+    /// inside.
+    fn state_at(&mut self, t: Real) {
+        let st = self.stepper;
+        if t == st.t() {
+            self.s.y.copy_from_slice(st.y());
+        } else if t == st.t_prev() {
+            self.s.y.copy_from_slice(st.y_prev());
+        } else {
+            st.dense(t, &mut self.s.y);
+        }
+    }
+
+    /// `g(t)` into `scratch.g`.
+    pub(crate) fn values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+        self.state_at(t);
+        self.counters.value_evals += 1;
+        self.funcs
+            .values(t, &self.s.y, &mut self.s.g)
+            .map_err(|source| EventError::Function { t, source })
+    }
+
+    /// The caller's `ġ(t)` into `scratch.gd`, if it has rates; `y` must hold the state
+    /// at `t` ([`values`](Self::values) at the same `t` just before).
+    pub(crate) fn caller_rates(&mut self, t: Real) -> Result<bool, EventError<G::Error>> {
+        let st = self.stepper;
+        if t == st.t() {
+            self.s.dy.copy_from_slice(st.dy());
+        } else if t == st.t_prev() {
+            self.s.dy.copy_from_slice(st.dy_prev());
+        } else {
+            st.dense_derivative(t, &mut self.s.dy);
+        }
+        let given = self
+            .funcs
+            .rates(t, &self.s.y, &self.s.dy, &mut self.s.gd)
+            .map_err(|source| EventError::Function { t, source })?;
+        if given {
+            self.counters.rate_evals += 1;
+        }
+        Ok(given)
+    }
+
+    /// `ġ(t)` into `scratch.gd`; [`values`](Self::values) at the same `t` must come
+    /// just before. Uses the caller's rates if it has them, else a one-sided difference
+    /// of `g` along the dense output with `δ = √ε h` (the step must not be empty).
+    pub(crate) fn rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+        if self.caller_rates(t)? {
+            return Ok(());
+        }
+        let st = self.stepper;
+        let (t0, t1) = (st.t_prev(), st.t());
+        let delta = (Real::EPSILON.sqrt() * (t1 - t0)).max(16.0 * Real::EPSILON * t.abs());
+        let t2 = if t + delta <= t1 {
+            t + delta
+        } else {
+            t - delta
+        };
+        if t2 == t1 {
+            self.s.y2.copy_from_slice(st.y());
+        } else {
+            st.dense(t2, &mut self.s.y2);
+        }
+        self.counters.value_evals += 1;
+        self.funcs
+            .values(t2, &self.s.y2, &mut self.s.g2)
+            .map_err(|source| EventError::Function { t: t2, source })?;
+        let inv = 1.0 / (t2 - t);
+        for ((gd, g2), g) in self.s.gd.iter_mut().zip(&self.s.g2).zip(&self.s.g) {
+            *gd = (g2 - g) * inv;
+        }
+        Ok(())
+    }
+}
+
+/// The time tolerance of a bracket `[a, b]` in a step of length `h`:
+/// `4 ε max(|a|, |b|) + t_tol`, i.e. 4 ulp of the time, with a floor of `10⁻³ ε h` so
+/// that a root at `t = 0` is bracketed in a bounded number of iterations.
+pub(crate) fn time_tol(a: Real, b: Real, h: Real, t_tol: Real) -> Real {
+    4.0 * Real::EPSILON * a.abs().max(b.abs()).max(1e-3 * h) + t_tol
+}
+
+impl EventLocator {
+    /// A locator for states of dimension `n` and `m` event functions.
+    pub fn new(n: usize, m: usize, settings: LocatorSettings) -> Self {
+        let k2 = settings.samples + 2;
+        Self {
+            n,
+            m,
+            samples: Samples {
+                ts: vec![0.0; k2],
+                gs: vec![0.0; k2 * m],
+                gds: vec![0.0; k2 * m],
+                known: vec![false; k2],
+            },
+            scratch: Scratch {
+                y: vec![0.0; n],
+                dy: vec![0.0; n],
+                y2: vec![0.0; n],
+                g: vec![0.0; m],
+                gd: vec![0.0; m],
+                g2: vec![0.0; m],
+            },
+            done: vec![false; m],
+            found: Vec::with_capacity(m),
+            counters: LocatorCounters::default(),
+            settings,
+        }
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &LocatorSettings {
+        &self.settings
+    }
+
+    /// The number `m` of event functions.
+    pub fn len(&self) -> usize {
+        self.m
+    }
+
+    /// Whether there are no event functions.
+    pub fn is_empty(&self) -> bool {
+        self.m == 0
+    }
+
+    /// Work since the locator was built.
+    pub fn counters(&self) -> LocatorCounters {
+        self.counters
+    }
+
+    /// The events of the last [`locate`](Self::locate): the earliest and every other
+    /// function's event within `simultaneity` of it, sorted by time (then index).
+    pub fn events(&self) -> &[Event] {
+        &self.found
+    }
+
+    pub(crate) fn check_dims<St: Stepper, E: std::error::Error + 'static, I>(
+        &self,
+        stepper: &St,
+        armed: &[bool],
+    ) -> Result<(), EventError<E, I>>
+    where
+        I: std::error::Error + 'static,
+    {
+        if stepper.dim() != self.n {
+            return Err(EventError::Dimension {
+                what: "state",
+                expected: self.n,
+                got: stepper.dim(),
+            });
+        }
+        if armed.len() != self.m {
+            return Err(EventError::Dimension {
+                what: "armed flags",
+                expected: self.m,
+                got: armed.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Finds the earliest closing event of any armed function in the last step
+    /// `[t_prev, t]` of `stepper` (a function whose flag in `armed` is false is
+    /// ignored). Returns it, or `None`; [`events`](Self::events) then lists the
+    /// simultaneous ones. Nothing is changed in the stepper: call
+    /// [`settle`](Self::settle) to move it to the event at full order.
+    ///
+    /// Stages: (1) sample `g` (and `ġ`) at `k + 2` equally spaced points; (2) walk the
+    /// sample intervals in time order, classifying each armed function (start, sign
+    /// change, dip, bounce); (3) refine each candidate with the Illinois method on the
+    /// dense output; (4) keep the earliest and those within `simultaneity` of it.
+    pub fn locate<St: Stepper, G: EventFunctions>(
+        &mut self,
+        stepper: &St,
+        funcs: &mut G,
+        armed: &[bool],
+    ) -> Result<Option<Event>, EventError<G::Error>> {
+        self.found.clear();
+        self.check_dims(stepper, armed)?;
+        let (t0, t1) = (stepper.t_prev(), stepper.t());
+        if t1 <= t0 || !armed.iter().any(|&a| a) {
+            return Ok(None);
+        }
+        self.counters.calls += 1;
+        let mut sp = Sampler {
+            stepper,
+            funcs,
+            s: &mut self.scratch,
+            counters: &mut self.counters,
+        };
+        sample(&mut sp, &mut self.samples, &self.settings, armed)?;
+
+        let (m, parts) = (self.m, self.settings.samples + 1);
+        let sim = self.settings.simultaneity;
+        self.done.fill(false);
+        let mut t_first = Real::INFINITY;
+        for j in 0..parts {
+            if self.samples.ts[j] > t_first + sim {
+                break;
+            }
+            for (i, &is_armed) in armed.iter().enumerate() {
+                if !is_armed || self.done[i] {
+                    continue;
+                }
+                if let Some(ev) = classify(&mut sp, &self.samples, &self.settings, m, i, j)? {
+                    self.done[i] = true;
+                    t_first = t_first.min(ev.t);
+                    self.found.push(ev);
+                }
+            }
+        }
+        self.found.retain(|e| e.t <= t_first + sim);
+        self.found
+            .sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.index.cmp(&b.index)));
+        Ok(self.found.first().copied())
+    }
+}
+
+/// Stage 1: `g` at the `k + 2` sample times, and `ġ` where it is needed (everywhere with
+/// the extremum search; else at the start, if an armed function is not positive there).
+fn sample<St: Stepper, G: EventFunctions>(
+    sp: &mut Sampler<'_, St, G>,
+    smp: &mut Samples,
+    settings: &LocatorSettings,
+    armed: &[bool],
+) -> Result<(), EventError<G::Error>> {
+    let (t0, t1) = (sp.stepper.t_prev(), sp.stepper.t());
+    let parts = settings.samples + 1;
+    let m = armed.len();
+    for j in 0..=parts {
+        let t = if j == parts {
+            t1
+        } else {
+            t0 + (t1 - t0) * (j as Real / parts as Real)
+        };
+        smp.ts[j] = t;
+        sp.values(t)?;
+        check_finite(&sp.s.g, armed, t)?;
+        smp.gs[j * m..(j + 1) * m].copy_from_slice(&sp.s.g);
+        let at_contact = j == 0 && sp.s.g.iter().zip(armed).any(|(g, &a)| a && *g <= 0.0);
+        smp.known[j] = settings.extremum_search || at_contact;
+        if smp.known[j] {
+            sp.rates(t)?;
+            check_finite(&sp.s.gd, armed, t)?;
+            smp.gds[j * m..(j + 1) * m].copy_from_slice(&sp.s.gd);
+        }
+    }
+    Ok(())
+}
+
+fn check_finite<E: std::error::Error + 'static>(
+    v: &[Real],
+    armed: &[bool],
+    t: Real,
+) -> Result<(), EventError<E>> {
+    match v.iter().zip(armed).position(|(x, &a)| a && !x.is_finite()) {
+        Some(index) => Err(EventError::NonFinite { t, index }),
+        None => Ok(()),
+    }
+}
+
+/// Stages 2–3 for function `i` on the sample interval `j`: the event it has there, if any.
+fn classify<St: Stepper, G: EventFunctions>(
+    sp: &mut Sampler<'_, St, G>,
+    smp: &Samples,
+    settings: &LocatorSettings,
+    m: usize,
+    i: usize,
+    j: usize,
+) -> Result<Option<Event>, EventError<G::Error>> {
+    let (a, b) = (smp.ts[j], smp.ts[j + 1]);
+    let (ga, gb) = (smp.gs[j * m + i], smp.gs[(j + 1) * m + i]);
+    let event = |kind, t_lo, t_hi| Event {
+        index: i,
+        kind,
+        t: t_hi,
+        t_lo,
+        t_hi,
+    };
+    // At the step's start, not separated: closing is an event, opening is not.
+    if j == 0 && ga <= 0.0 {
+        let gda = smp.gds[i];
+        if gda < 0.0 || (gda == 0.0 && gb < ga) {
+            return Ok(Some(event(EventKind::AtStart, a, a)));
+        }
+    }
+    // A sign change between the samples.
+    if ga > 0.0 && gb <= 0.0 {
+        let (lo, hi) = root(sp, settings, i, (a, ga), (b, gb))?;
+        return Ok(Some(event(EventKind::Crossing, lo, hi)));
+    }
+    if !settings.extremum_search {
+        return Ok(None);
+    }
+    let (gda, gdb) = (smp.gds[j * m + i], smp.gds[(j + 1) * m + i]);
+    if ga > 0.0 && gb > 0.0 && gda < 0.0 && gdb > 0.0 {
+        // A minimum between two positive samples: does it dip to g ≤ 0?
+        let found = extremum(sp, settings, i, (a, -gda), (b, -gdb), Extremum::Min)?;
+        if let Found::Crossed(t, g_t) = found {
+            let (lo, hi) = root(sp, settings, i, (a, ga), (t, g_t))?;
+            return Ok(Some(event(EventKind::Grazing, lo, hi)));
+        }
+    } else if ga <= 0.0 && gb <= 0.0 && gda >= 0.0 && gdb < 0.0 {
+        // A maximum between two non-positive samples: does it rise to g > 0?
+        if gda == 0.0 {
+            return Ok(Some(event(EventKind::Reclosing, a, a)));
+        }
+        match extremum(sp, settings, i, (a, gda), (b, gdb), Extremum::Max)? {
+            Found::Crossed(t, g_t) => {
+                let (lo, hi) = root(sp, settings, i, (t, g_t), (b, gb))?;
+                return Ok(Some(event(EventKind::Bounce, lo, hi)));
+            }
+            Found::Extremum(lo, hi) => {
+                return Ok(Some(event(EventKind::Reclosing, lo, hi)));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// The root of `gᵢ` in `[lo, hi]`, `gᵢ(lo) > 0 ≥ gᵢ(hi)`, as a bracket to the time
+/// tolerance (Illinois on the dense output).
+pub(crate) fn root<St: Stepper, G: EventFunctions>(
+    sp: &mut Sampler<'_, St, G>,
+    settings: &LocatorSettings,
+    i: usize,
+    lo: (Real, Real),
+    hi: (Real, Real),
+) -> Result<(Real, Real), EventError<G::Error>> {
+    let h = sp.stepper.t() - sp.stepper.t_prev();
+    let solved = illinois(
+        |t| {
+            sp.values(t)?;
+            let g = sp.s.g[i];
+            if g.is_finite() {
+                Ok(Probe::Value(g))
+            } else {
+                Err(EventError::NonFinite { t, index: i })
+            }
+        },
+        lo,
+        hi,
+        |a, b| time_tol(a, b, h, settings.t_tol),
+        settings.max_iter,
+    )?;
+    match solved {
+        Solved::Bracket { lo, hi, .. } => Ok((lo, hi)),
+        Solved::Stopped { t, .. } => Ok((t, t)),
+        Solved::NotConverged { lo, hi, iters } => Err(EventError::NotConverged {
+            index: i,
+            t_lo: lo,
+            t_hi: hi,
+            iters,
+        }),
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Extremum {
+    Min,
+    Max,
+}
+
+/// What an extremum search found.
+enum Found {
+    /// A point `(t, g(t))` on the other side of zero (`g ≤ 0` for a minimum, `g > 0` for
+    /// a maximum).
+    Crossed(Real, Real),
+    /// The extremum, bracketed, without reaching the other side.
+    Extremum(Real, Real),
+}
+
+/// Searches the extremum of `gᵢ` in `[a, b]` by Illinois on `±ġᵢ` (`+ġ` for a maximum,
+/// `−ġ` for a minimum; positive at `a`, negative at `b`), stopping as soon as a point
+/// on the other side of zero is met.
+fn extremum<St: Stepper, G: EventFunctions>(
+    sp: &mut Sampler<'_, St, G>,
+    settings: &LocatorSettings,
+    i: usize,
+    a: (Real, Real),
+    b: (Real, Real),
+    kind: Extremum,
+) -> Result<Found, EventError<G::Error>> {
+    let h = sp.stepper.t() - sp.stepper.t_prev();
+    let mut crossed = Real::NAN;
+    let solved = illinois(
+        |t| {
+            sp.values(t)?;
+            let g = sp.s.g[i];
+            let other_side = match kind {
+                Extremum::Min => g <= 0.0,
+                Extremum::Max => g > 0.0,
+            };
+            if other_side {
+                crossed = g;
+                return Ok(Probe::Stop);
+            }
+            sp.rates(t)?;
+            let gd = sp.s.gd[i];
+            if !gd.is_finite() {
+                return Err(EventError::NonFinite { t, index: i });
+            }
+            Ok(Probe::Value(if kind == Extremum::Min { -gd } else { gd }))
+        },
+        a,
+        b,
+        |a, b| time_tol(a, b, h, settings.t_tol),
+        settings.max_iter,
+    )?;
+    Ok(match solved {
+        Solved::Stopped { t, .. } => Found::Crossed(t, crossed),
+        Solved::Bracket { lo, hi, .. } | Solved::NotConverged { lo, hi, .. } => {
+            Found::Extremum(lo, hi)
+        }
+    })
+}

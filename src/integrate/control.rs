@@ -1,0 +1,195 @@
+//! Step-size control of DOPRI5: the weighted error norm, the PI controller and the
+//! initial step guess of [HNW, II.4] as in Hairer's code `DOPRI5`, and the clipping of a
+//! step to a stop time (shared with RK4).
+
+use crate::math::Real;
+
+/// Weighted RMS norm of the local error estimate [HNW, II.4, Eq. (4.11)]:
+///
+/// ```text
+///   err = √( (1/n) Σᵢ (eᵢ / skᵢ)² ),   skᵢ = atol + rtol · max(|y₀ᵢ|, |y₁ᵢ|)
+/// ```
+///
+/// A step is accepted when `err ≤ 1`.
+pub(crate) fn error_norm(e: &[Real], y0: &[Real], y1: &[Real], rtol: Real, atol: Real) -> Real {
+    if e.is_empty() {
+        return 0.0;
+    }
+    let sum: Real = e
+        .iter()
+        .zip(y0.iter().zip(y1))
+        .map(|(e, (y0, y1))| {
+            let sk = atol + rtol * y0.abs().max(y1.abs());
+            let r = e / sk;
+            r * r
+        })
+        .sum();
+    (sum / e.len() as Real).sqrt()
+}
+
+/// The PI step-size controller with Lund's stabilization [HNW, II.4, Eq. (4.13) and the
+/// text after it; Gustafsson, ACM TOMS 20 (1994)], with the constants of Hairer's
+/// `DOPRI5`:
+///
+/// ```text
+///   fac = err^(1/5 − 0.75 β) · err_old^(−β) / safety,  clamped to [1/fac_max, 1/fac_min]
+///   h_new = h / fac
+///   accepted (err ≤ 1): err_old ← max(err, 1e-4); after a rejection h_new ≤ h
+///   rejected (err > 1): h_new = h · max(fac_min, safety · err^(−(1/5 − 0.75 β)))
+/// ```
+///
+/// `β = 0` is the classical I (elementary) controller; `β ≈ 0.04` damps oscillating step
+/// sequences.
+#[derive(Clone, Debug)]
+pub(crate) struct PiController {
+    pub safety: Real,
+    pub beta: Real,
+    pub fac_min: Real,
+    pub fac_max: Real,
+    err_old: Real,
+    rejected_last: bool,
+}
+
+/// The controller's verdict on one attempted step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Verdict {
+    pub accept: bool,
+    /// The next step to try (s).
+    pub h_new: Real,
+}
+
+impl PiController {
+    pub fn new(safety: Real, beta: Real, fac_min: Real, fac_max: Real) -> Self {
+        Self {
+            safety,
+            beta,
+            fac_min,
+            fac_max,
+            err_old: 1e-4,
+            rejected_last: false,
+        }
+    }
+
+    /// Forgets the history (after a start or a reset).
+    pub fn restart(&mut self) {
+        self.err_old = 1e-4;
+        self.rejected_last = false;
+    }
+
+    /// Judges a step of length `h` with error norm `err`. A non-finite `err` rejects the
+    /// step with the smallest factor.
+    pub fn judge(&mut self, h: Real, err: Real) -> Verdict {
+        if !err.is_finite() {
+            self.rejected_last = true;
+            return Verdict {
+                accept: false,
+                h_new: h * self.fac_min,
+            };
+        }
+        let expo = 0.2 - 0.75 * self.beta;
+        let fac11 = err.powf(expo);
+        if err <= 1.0 {
+            let fac = (fac11 / self.err_old.powf(self.beta) / self.safety)
+                .clamp(1.0 / self.fac_max, 1.0 / self.fac_min);
+            let mut h_new = h / fac;
+            if self.rejected_last {
+                h_new = h_new.min(h);
+            }
+            self.err_old = err.max(1e-4);
+            self.rejected_last = false;
+            Verdict {
+                accept: true,
+                h_new,
+            }
+        } else {
+            self.rejected_last = true;
+            let fac = (fac11 / self.safety).min(1.0 / self.fac_min);
+            Verdict {
+                accept: false,
+                h_new: h / fac,
+            }
+        }
+    }
+}
+
+/// The step to try from `t` toward `t_stop`, `remaining = t_stop − t > 0`: `h_try` capped
+/// by `h_max`; the step that reaches `t_stop` lands on it exactly. As in Hairer's codes,
+/// a step that would leave a sliver shorter than 1 % of itself is stretched to
+/// `t_stop` when that stays within `h_max` (to a relative 1e-12), otherwise the rest is
+/// split into two equal steps. Returns the step and whether it reaches `t_stop`.
+pub(crate) fn clip_step(h_try: Real, h_max: Real, remaining: Real) -> (Real, bool) {
+    let h = h_try.min(h_max);
+    if remaining <= h {
+        (remaining, true)
+    } else if remaining <= 1.01 * h {
+        if remaining <= h_max * (1.0 + 1e-12) {
+            (remaining, true)
+        } else {
+            (0.5 * remaining, false)
+        }
+    } else {
+        (h, false)
+    }
+}
+
+/// The smallest admissible step at `t` after rejections: `max(h_min, 10 ε |t|)` (below
+/// `10 ε |t|` the step is lost in the rounding of `t + h`; Hairer's `DOPRI5` test).
+pub(crate) fn smallest_step(h_min: Real, t: Real) -> Real {
+    h_min.max(10.0 * Real::EPSILON * t.abs())
+}
+
+/// Scaled squared norms used by the initial step guess [HNW, II.4, p. 169]:
+/// `Σ (vᵢ / skᵢ)²` with `skᵢ = atol + rtol |y₀ᵢ|` (no division by `n`, as in `HINIT`).
+pub(crate) fn scaled_sq(v: &[Real], y0: &[Real], rtol: Real, atol: Real) -> Real {
+    v.iter()
+        .zip(y0)
+        .map(|(v, y)| {
+            let r = v / (atol + rtol * y.abs());
+            r * r
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clip_lands_on_the_stop_time() {
+        assert_eq!(clip_step(0.1, 1.0, 0.05), (0.05, true));
+        assert_eq!(clip_step(0.1, 1.0, 0.3), (0.1, false));
+        // A sliver of 0.5 % is absorbed.
+        assert_eq!(clip_step(0.1, 1.0, 0.1005), (0.1005, true));
+        // ... unless that would exceed h_max: two halves instead.
+        assert_eq!(clip_step(0.1, 0.1, 0.1005), (0.05025, false));
+        // h_max caps the trial step.
+        assert_eq!(clip_step(0.5, 0.2, 1.0), (0.2, false));
+    }
+
+    #[test]
+    fn controller_grows_at_most_fac_max_and_shrinks_after_rejection() {
+        let mut c = PiController::new(0.9, 0.04, 0.2, 10.0);
+        let v = c.judge(1.0, 0.0);
+        assert!(v.accept);
+        assert_eq!(v.h_new, 10.0);
+        let v = c.judge(1.0, 1e6);
+        assert!(!v.accept);
+        assert_eq!(v.h_new, 0.2);
+        // After a rejection the next accepted step does not grow.
+        let v = c.judge(0.2, 1e-3);
+        assert!(v.accept);
+        assert_eq!(v.h_new, 0.2);
+        let v = c.judge(0.2, Real::NAN);
+        assert!(!v.accept);
+        assert!((v.h_new - 0.04).abs() < 1e-16);
+    }
+
+    #[test]
+    fn error_norm_is_a_weighted_rms() {
+        let e = [1e-6, -2e-6];
+        let y = [1.0, 0.0];
+        // sk = (1e-6 + 1e-6·1, 1e-6) → ratios (0.5, −2) → √((0.25 + 4)/2)
+        let n = error_norm(&e, &y, &y, 1e-6, 1e-6);
+        assert!((n - (4.25f64 / 2.0).sqrt()).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,126 @@
+//! The continuous extension of one step: a polynomial in `θ = (t − t₀)/h` that
+//! interpolates both ends of the step and their slopes (see [`tableau`](super::tableau)
+//! for its derivation).
+//!
+//! ```text
+//!   u(θ)  = y₀ + θ (r₂ + (1−θ) (r₃ + θ (r₄ + (1−θ) r₅)))
+//!   u'(θ) = r₂ + (1 − 2θ) r₃ + θ (2 − 3θ) r₄ + 2θ (1−θ) (1 − 2θ) r₅      (d/dθ)
+//!   r₂ = y₁ − y₀,  r₃ = h f₀ − r₂,  r₄ = r₂ − h f₁ − r₃
+//! ```
+//!
+//! With `r₅ = 0` this is the cubic Hermite interpolant of `(y₀, f₀, y₁, f₁)` (order 3,
+//! used by RK4); DOPRI5 adds Shampine's `r₅` for order 4. `u'(0) = h f₀`, `u'(1) = h f₁`.
+
+use crate::math::Real;
+
+/// Coefficients of the continuous extension of the last step. `y₀` itself is not stored:
+/// the stepper passes its `y_prev`.
+#[derive(Clone, Debug)]
+pub(crate) struct Dense {
+    /// Start of the step `t₀` (s).
+    pub t0: Real,
+    /// Length of the step `h` (s); 0 for an empty step.
+    pub h: Real,
+    pub r2: Vec<Real>,
+    pub r3: Vec<Real>,
+    pub r4: Vec<Real>,
+    /// Shampine's quartic term (all zeros for the cubic Hermite interpolant).
+    pub r5: Vec<Real>,
+}
+
+impl Dense {
+    pub fn new(n: usize) -> Self {
+        Self {
+            t0: 0.0,
+            h: 0.0,
+            r2: vec![0.0; n],
+            r3: vec![0.0; n],
+            r4: vec![0.0; n],
+            r5: vec![0.0; n],
+        }
+    }
+
+    pub fn resize(&mut self, n: usize) {
+        for v in [&mut self.r2, &mut self.r3, &mut self.r4, &mut self.r5] {
+            v.resize(n, 0.0);
+        }
+    }
+
+    /// Sets the cubic Hermite part `r₂, r₃, r₄` from the ends of a step of length `h`.
+    /// `r₅` is left untouched.
+    pub fn set_hermite(
+        &mut self,
+        t0: Real,
+        h: Real,
+        y0: &[Real],
+        f0: &[Real],
+        y1: &[Real],
+        f1: &[Real],
+    ) {
+        self.t0 = t0;
+        self.h = h;
+        let coeffs = self.r2.iter_mut().zip(&mut self.r3).zip(&mut self.r4);
+        let ends = y0.iter().zip(f0).zip(y1.iter().zip(f1));
+        for (((r2, r3), r4), ((y0, f0), (y1, f1))) in coeffs.zip(ends) {
+            let ydiff = y1 - y0;
+            let bspl = h * f0 - ydiff;
+            *r2 = ydiff;
+            *r3 = bspl;
+            *r4 = ydiff - h * f1 - bspl;
+        }
+    }
+
+    /// An empty step at `t0`: `u ≡ y₀`.
+    pub fn set_empty(&mut self, t0: Real) {
+        self.t0 = t0;
+        self.h = 0.0;
+        for v in [&mut self.r2, &mut self.r3, &mut self.r4, &mut self.r5] {
+            v.fill(0.0);
+        }
+    }
+
+    /// `θ` of `t`; 0 on an empty step.
+    #[inline]
+    fn theta(&self, t: Real) -> Real {
+        if self.h == 0.0 {
+            0.0
+        } else {
+            (t - self.t0) / self.h
+        }
+    }
+
+    /// `u(θ(t))` into `out`.
+    pub fn eval(&self, y0: &[Real], t: Real, out: &mut [Real]) {
+        let th = self.theta(t);
+        let th1 = 1.0 - th;
+        let coeffs = self
+            .r2
+            .iter()
+            .zip(&self.r3)
+            .zip(self.r4.iter().zip(&self.r5));
+        for ((o, y0), ((r2, r3), (r4, r5))) in out.iter_mut().zip(y0).zip(coeffs) {
+            *o = y0 + th * (r2 + th1 * (r3 + th * (r4 + th1 * r5)));
+        }
+    }
+
+    /// `u'(θ(t)) / h` (the time derivative) into `out`; `f0` on an empty step.
+    pub fn eval_derivative(&self, f0: &[Real], t: Real, out: &mut [Real]) {
+        if self.h == 0.0 {
+            out.copy_from_slice(f0);
+            return;
+        }
+        let th = self.theta(t);
+        let a3 = 1.0 - 2.0 * th;
+        let a4 = th * (2.0 - 3.0 * th);
+        let a5 = 2.0 * th * (1.0 - th) * (1.0 - 2.0 * th);
+        let inv_h = 1.0 / self.h;
+        let coeffs = self
+            .r2
+            .iter()
+            .zip(&self.r3)
+            .zip(self.r4.iter().zip(&self.r5));
+        for (o, ((r2, r3), (r4, r5))) in out.iter_mut().zip(coeffs) {
+            *o = (r2 + a3 * r3 + a4 * r4 + a5 * r5) * inv_h;
+        }
+    }
+}

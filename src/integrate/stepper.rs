@@ -1,0 +1,127 @@
+//! The stepping interface shared by the integrators: the simulation loop drives a
+//! [`Stepper`] one accepted step at a time, reads the dense output of the last step to
+//! locate events, re-takes the step to an event time, and resets the state after an
+//! impact. The reset map itself (the impact law) stays outside the integrator.
+
+use serde::{Deserialize, Serialize};
+
+use super::{IntegrateError, Method, OdeSystem};
+use crate::math::Real;
+
+/// What one call of [`Stepper::step`] did. Neither outcome is a failure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StepOutcome {
+    /// One step was accepted and it ended before the stop time.
+    Advanced,
+    /// One step was accepted and it ended exactly at the stop time (`t() == t_stop`).
+    ReachedStop,
+}
+
+/// Work counters of a stepper since it was built.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Counters {
+    /// Accepted steps (re-taken steps not included).
+    pub steps: u64,
+    /// Rejected steps (DOPRI5 only; RK4 never rejects).
+    pub rejected: u64,
+    /// Evaluations of the right-hand side, all included: start, stages, steps re-taken
+    /// to an event and resets.
+    pub rhs_evals: u64,
+    /// Steps re-taken to an event time by [`Stepper::restep_to`] (a rewind to the
+    /// step's start costs nothing and is not counted).
+    pub resteps: u64,
+}
+
+/// One-step integration driven from outside, with a continuous extension of the last
+/// step.
+///
+/// The life cycle is `start` → (`step` → read `dense` / locate events → possibly
+/// `restep_to` → possibly `reset`)*. After [`step`](Stepper::step) (or
+/// [`restep_to`](Stepper::restep_to)), `[t_prev(), t()]` is the last step: its end
+/// points are `y_prev()` and `y()`, with derivatives `dy_prev()` and `dy()`, and
+/// [`dense`](Stepper::dense) evaluates the continuous extension inside it.
+///
+/// Integration runs forward in time only. The methods are generic over the system, so
+/// the trait is not object safe; [`AnyStepper`](super::AnyStepper) chooses a method at
+/// run time.
+pub trait Stepper {
+    /// The method.
+    fn method(&self) -> Method;
+
+    /// Sets the initial value `y(t0) = y0`, evaluates `f(t0, y0)`, and (DOPRI5) guesses
+    /// the first step. The last step is empty (`t_prev() == t() == t0`).
+    fn start<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t0: Real,
+        y0: &[Real],
+    ) -> Result<(), IntegrateError<S::Error>>;
+
+    /// Takes one accepted step that does not go past `t_stop` (it ends exactly at
+    /// `t_stop` when it reaches it). DOPRI5 may reject and retry steps inside this call.
+    fn step<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t_stop: Real,
+    ) -> Result<StepOutcome, IntegrateError<S::Error>>;
+
+    /// Re-takes the last step from `(t_prev(), y_prev())` with `h = t_target − t_prev()`,
+    /// so that the state at `t_target` is the method's full-order solution rather than
+    /// its continuous extension. `t_target` must lie in `[t_prev(), t_end]`, where `t_end`
+    /// is the end of the last *accepted* step (several re-steps in a row are allowed).
+    /// Afterwards the last step is `[t_prev(), t_target]` and the stepper continues from
+    /// `t_target`; the step-size suggestion is kept. `t_target == t_prev()` rewinds to the
+    /// step's start without evaluating `f`.
+    fn restep_to<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t_target: Real,
+    ) -> Result<(), IntegrateError<S::Error>>;
+
+    /// Replaces the state at a discontinuity (an impact): `y(t) = y`. The derivative is
+    /// re-evaluated (the FSAL derivative of the old state is invalid), the last step
+    /// becomes empty at `t`, and the step-size suggestion is kept (limited by `h_max`).
+    fn reset<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t: Real,
+        y: &[Real],
+    ) -> Result<(), IntegrateError<S::Error>>;
+
+    /// Current time `t` (s).
+    fn t(&self) -> Real;
+    /// Current state `y(t)`.
+    fn y(&self) -> &[Real];
+    /// Derivative `f(t, y)` at the current state.
+    fn dy(&self) -> &[Real];
+    /// Start of the last step (s).
+    fn t_prev(&self) -> Real;
+    /// State at the start of the last step.
+    fn y_prev(&self) -> &[Real];
+    /// Derivative at the start of the last step.
+    fn dy_prev(&self) -> &[Real];
+
+    /// Evaluates the continuous extension of the last step at `t ∈ [t_prev(), t()]` into
+    /// `out` (length `n`). Outside the step the polynomial is extrapolated, which is
+    /// inaccurate. On an empty step it returns `y()`.
+    fn dense(&self, t: Real, out: &mut [Real]);
+
+    /// Evaluates the time derivative of the continuous extension at `t` into `out`. It
+    /// interpolates `dy_prev()` and `dy()` at the ends and is one order lower than
+    /// [`dense`](Stepper::dense) inside.
+    fn dense_derivative(&self, t: Real, out: &mut [Real]);
+
+    /// Largest step (s); the loop lowers it, e.g. from a bound on the closing speed of the
+    /// contacts. `Real::INFINITY` removes the cap. Non-positive or NaN values are
+    /// ignored.
+    fn set_h_max(&mut self, h_max: Real);
+
+    /// The current largest step (s).
+    fn h_max(&self) -> Real;
+
+    /// Work counters since the stepper was built.
+    fn counters(&self) -> Counters;
+
+    /// The dimension `n` of the state.
+    fn dim(&self) -> usize;
+}
