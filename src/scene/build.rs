@@ -5,25 +5,18 @@ use std::collections::HashMap;
 use std::ops::Range;
 
 use nalgebra::DVector;
-use parry2d_f64::shape::SharedShape;
 use toml::Spanned;
 
 use crate::contact::{ContactError, signed_gap};
 use crate::kinematics::update_positions;
-use crate::math::{Pose, Real, Vec2, cross};
-use crate::model::{
-    Body, BodyId, Collider, ColliderId, Joint, JointForce, JointKind, Material, Model,
-    ModelBuilder, PrescribedMotion,
-};
+use crate::math::{Real, Vec2};
+use crate::model::{Body, BodyId, Collider, ColliderId, Material, Model, ModelBuilder};
 use crate::settings::{IntegratorSettings, Settings};
 use crate::state::{Data, State};
 
 use super::SceneError;
 use super::error::Locator;
-use super::format::{
-    BodySpec, ChainSpec, ContactSpec, DriveSpec, JointSpec, JointType, ObstacleSpec, ObstacleType,
-    Pair, RunSpec, SceneFile, ShapeSpec, ShapeType,
-};
+use super::format::{BodySpec, ContactSpec, Pair, RunSpec, SceneFile};
 use super::units::{Kind, Quantity};
 
 /// The scene file version this loader reads.
@@ -50,22 +43,22 @@ pub(super) struct Built {
 
 /// Where a name points.
 #[derive(Clone, Copy, Debug)]
-enum Named {
+pub(super) enum Named {
     Body(BodyId),
     Obstacle(ColliderId),
 }
 
 /// The conversion in progress.
-struct Builder<'a> {
-    loc: &'a Locator<'a>,
-    model: ModelBuilder,
-    names: HashMap<String, Named>,
-    q0: Vec<Real>,
-    u0: Vec<Real>,
+pub(super) struct Builder<'a> {
+    pub(super) loc: &'a Locator<'a>,
+    pub(super) model: ModelBuilder,
+    pub(super) names: HashMap<String, Named>,
+    pub(super) q0: Vec<Real>,
+    pub(super) u0: Vec<Real>,
     /// For each collider, the span its errors point at.
-    collider_spans: Vec<Range<usize>>,
+    pub(super) collider_spans: Vec<Range<usize>>,
     /// For each body, its colliders.
-    body_colliders: HashMap<BodyId, Vec<ColliderId>>,
+    pub(super) body_colliders: HashMap<BodyId, Vec<ColliderId>>,
 }
 
 pub(super) fn build(
@@ -252,12 +245,12 @@ fn tree_order(
 }
 
 impl Builder<'_> {
-    fn err(&self, span: Range<usize>, message: impl Into<String>) -> SceneError {
+    pub(super) fn err(&self, span: Range<usize>, message: impl Into<String>) -> SceneError {
         self.loc.at(span, message)
     }
 
     /// A finite `[x, y]`.
-    fn pair(&self, v: &Spanned<Pair>) -> Result<Vec2, SceneError> {
+    pub(super) fn pair(&self, v: &Spanned<Pair>) -> Result<Vec2, SceneError> {
         let [x, y] = *v.get_ref();
         if x.is_finite() && y.is_finite() {
             Ok(Vec2::new(x, y))
@@ -269,12 +262,21 @@ impl Builder<'_> {
         }
     }
 
-    fn pair_or(&self, v: &Option<Spanned<Pair>>, default: Vec2) -> Result<Vec2, SceneError> {
+    pub(super) fn pair_or(
+        &self,
+        v: &Option<Spanned<Pair>>,
+        default: Vec2,
+    ) -> Result<Vec2, SceneError> {
         v.as_ref().map_or(Ok(default), |v| self.pair(v))
     }
 
     /// A finite positive number.
-    fn positive(&self, v: &Spanned<Real>, what: &str, unit: &str) -> Result<Real, SceneError> {
+    pub(super) fn positive(
+        &self,
+        v: &Spanned<Real>,
+        what: &str,
+        unit: &str,
+    ) -> Result<Real, SceneError> {
         let x = *v.get_ref();
         if x.is_finite() && x > 0.0 {
             Ok(x)
@@ -287,7 +289,7 @@ impl Builder<'_> {
     }
 
     /// An optional quantity of the given kind.
-    fn quantity(
+    pub(super) fn quantity(
         &self,
         v: &Option<Spanned<Quantity>>,
         kind: Kind,
@@ -302,7 +304,7 @@ impl Builder<'_> {
         }
     }
 
-    fn quantity_or(
+    pub(super) fn quantity_or(
         &self,
         v: &Option<Spanned<Quantity>>,
         kind: Kind,
@@ -312,7 +314,7 @@ impl Builder<'_> {
     }
 
     /// Registers a body or obstacle name (unique, not `world`).
-    fn name(&mut self, name: &Spanned<String>, what: Named) -> Result<(), SceneError> {
+    pub(super) fn name(&mut self, name: &Spanned<String>, what: Named) -> Result<(), SceneError> {
         let n = name.get_ref();
         if n.is_empty() || n == "world" {
             return Err(self.err(
@@ -329,7 +331,7 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn add_collider(&mut self, collider: Collider, span: Range<usize>) -> ColliderId {
+    pub(super) fn add_collider(&mut self, collider: Collider, span: Range<usize>) -> ColliderId {
         let body = collider.body;
         let id = self.model.add_collider(collider);
         self.collider_spans.push(span);
@@ -339,59 +341,8 @@ impl Builder<'_> {
         id
     }
 
-    /// `[chain]`: `links` uniform links hanging from `at`, relative angles, capsules.
-    fn chain(&mut self, spec: &Spanned<ChainSpec>, links: Option<usize>) -> Result<(), SceneError> {
-        let c = spec.get_ref();
-        let n = match links {
-            Some(n) => n as i64,
-            None => *c.links.get_ref(),
-        };
-        if !(1..=10_000).contains(&n) {
-            return Err(self.err(
-                c.links.span(),
-                format!("a chain has 1 to 10000 links, got {n}"),
-            ));
-        }
-        let length = self.positive(&c.length, "the link length", "m")?;
-        let mass = self.positive(&c.mass, "the link mass", "kg")?;
-        let radius = self.positive(&c.radius, "the link radius", "m")?;
-        let at = self.pair_or(&c.at, Vec2::ZERO)?;
-        let angle = self.quantity_or(&c.angle, Kind::Angle, 0.0)?;
-        let rate = self.quantity_or(&c.rate, Kind::AngularRate, 0.0)?;
-        let prefix = c.name.as_ref().map_or("link", |s| s.get_ref().as_str());
-        let mut parent = None;
-        for i in 1..=n {
-            let name = format!("{prefix}{i}");
-            // A uniform rod along −y of the body frame: c = (0, −L/2), I_c = m L²/12.
-            let body = Body::new(
-                &name,
-                mass,
-                Vec2::new(0.0, -0.5 * length),
-                mass * length * length / 12.0,
-            );
-            let placement = if i == 1 {
-                Pose::from_translation(at)
-            } else {
-                Pose::translation(0.0, -length)
-            };
-            let id = self
-                .model
-                .add_body(body, Joint::revolute(&name, parent, placement));
-            self.name(&Spanned::new(spec.span(), name.clone()), Named::Body(id))?;
-            let shape = SharedShape::capsule(Vec2::ZERO, Vec2::new(0.0, -length), radius);
-            self.add_collider(
-                Collider::new(&name, Some(id), shape, Pose::IDENTITY),
-                spec.span(),
-            );
-            self.q0.push(if i == 1 { angle } else { 0.0 });
-            self.u0.push(if i == 1 { rate } else { 0.0 });
-            parent = Some(id);
-        }
-        Ok(())
-    }
-
     /// `[[body]]` with its joint and shapes. Its parent is already in the model.
-    fn body(&mut self, spec: &Spanned<BodySpec>) -> Result<(), SceneError> {
+    pub(super) fn body(&mut self, spec: &Spanned<BodySpec>) -> Result<(), SceneError> {
         let s = spec.get_ref();
         let mass = self.positive(&s.mass, "the mass", "kg")?;
         let inertia = self.positive(&s.inertia, "the moment of inertia", "kg·m²")?;
@@ -424,435 +375,11 @@ impl Builder<'_> {
         Ok(())
     }
 
-    /// The joint, its initial coordinates and speeds.
-    fn joint(
-        &self,
-        name: &str,
-        s: &JointSpec,
-        parent: Option<BodyId>,
-    ) -> Result<(Joint, Vec<Real>, Vec<Real>), SceneError> {
-        use Kind::{Angle, AngularRate, Plain};
-        let ty = *s.kind.get_ref();
-        self.allowed_joint_fields(s, ty)?;
-        let at = self.pair_or(&s.at, Vec2::ZERO)?;
-        let orientation = self.quantity_or(&s.orientation, Angle, 0.0)?;
-        let placement = Pose::new(at, orientation);
-        let (kind, q, u) = match ty {
-            JointType::Revolute => (
-                JointKind::Revolute {
-                    absolute: s.absolute.as_ref().is_some_and(|a| *a.get_ref()),
-                },
-                vec![self.quantity_or(&s.angle, Angle, 0.0)?],
-                vec![self.quantity_or(&s.rate, AngularRate, 0.0)?],
-            ),
-            JointType::Prismatic => {
-                let axis = match &s.axis {
-                    None => {
-                        return Err(self.err(s.kind.span(), "a prismatic joint needs its `axis`"));
-                    }
-                    Some(a) => {
-                        let v = self.pair(a)?;
-                        v.try_normalize()
-                            .ok_or_else(|| self.err(a.span(), "the axis must not be zero"))?
-                    }
-                };
-                (
-                    JointKind::Prismatic { axis },
-                    vec![self.quantity_or(&s.position, Plain, 0.0)?],
-                    vec![self.quantity_or(&s.speed, Plain, 0.0)?],
-                )
-            }
-            JointType::Translation => (
-                JointKind::Translation,
-                vec![
-                    self.quantity_or(&s.x, Plain, 0.0)?,
-                    self.quantity_or(&s.y, Plain, 0.0)?,
-                ],
-                vec![
-                    self.quantity_or(&s.vx, Plain, 0.0)?,
-                    self.quantity_or(&s.vy, Plain, 0.0)?,
-                ],
-            ),
-            JointType::Planar => (
-                JointKind::Planar,
-                vec![
-                    self.quantity_or(&s.x, Plain, 0.0)?,
-                    self.quantity_or(&s.y, Plain, 0.0)?,
-                    self.quantity_or(&s.angle, Angle, 0.0)?,
-                ],
-                vec![
-                    self.quantity_or(&s.vx, Plain, 0.0)?,
-                    self.quantity_or(&s.vy, Plain, 0.0)?,
-                    self.quantity_or(&s.rate, AngularRate, 0.0)?,
-                ],
-            ),
-            JointType::Fixed => (JointKind::Fixed, vec![], vec![]),
-        };
-        let mut joint = Joint::new(name, kind, parent, placement);
-        let (coordinate, rate) = if ty == JointType::Revolute {
-            (Angle, AngularRate)
-        } else {
-            (Plain, Plain)
-        };
-        joint.force = JointForce {
-            stiffness: self.non_negative(&s.stiffness)?,
-            rest: self.quantity_or(&s.rest, coordinate, 0.0)?,
-            damping: self.non_negative(&s.damping)?,
-            effort: self.quantity_or(
-                if ty == JointType::Revolute {
-                    &s.torque
-                } else {
-                    &s.force
-                },
-                Plain,
-                0.0,
-            )?,
-        };
-        if let Some(drive) = &s.drive {
-            joint.drive = Some(self.drive(drive, q[0], coordinate, rate)?);
-            return Ok((joint, vec![], vec![]));
-        }
-        Ok((joint, q, u))
-    }
-
-    fn non_negative(&self, v: &Option<Spanned<Quantity>>) -> Result<Real, SceneError> {
-        let x = self.quantity_or(v, Kind::Plain, 0.0)?;
-        match v {
-            Some(v) if x < 0.0 => Err(self.err(v.span(), format!("must be non-negative, got {x}"))),
-            _ => Ok(x),
-        }
-    }
-
-    /// `drive = { rate, amplitude, angular_frequency, phase }` with `q₀` the joint's
-    /// initial coordinate.
-    fn drive(
-        &self,
-        d: &Spanned<DriveSpec>,
-        q0: Real,
-        coordinate: Kind,
-        rate: Kind,
-    ) -> Result<PrescribedMotion, SceneError> {
-        let s = d.get_ref();
-        Ok(PrescribedMotion {
-            q0,
-            rate: self.quantity_or(&s.rate, rate, 0.0)?,
-            amplitude: self.quantity_or(&s.amplitude, coordinate, 0.0)?,
-            angular_frequency: self.quantity_or(&s.angular_frequency, Kind::AngularRate, 0.0)?,
-            phase: self.quantity_or(&s.phase, Kind::Angle, 0.0)?,
-        })
-    }
-
-    /// Rejects the fields that a joint of type `ty` does not have.
-    fn allowed_joint_fields(&self, s: &JointSpec, ty: JointType) -> Result<(), SceneError> {
-        let span = |v: &Option<Spanned<Quantity>>| v.as_ref().map(|v| v.span());
-        let present: [(&str, Option<Range<usize>>); 17] = [
-            ("absolute", s.absolute.as_ref().map(|v| v.span())),
-            ("axis", s.axis.as_ref().map(|v| v.span())),
-            ("angle", span(&s.angle)),
-            ("rate", span(&s.rate)),
-            ("position", span(&s.position)),
-            ("speed", span(&s.speed)),
-            ("x", span(&s.x)),
-            ("y", span(&s.y)),
-            ("vx", span(&s.vx)),
-            ("vy", span(&s.vy)),
-            ("stiffness", span(&s.stiffness)),
-            ("rest", span(&s.rest)),
-            ("damping", span(&s.damping)),
-            ("torque", span(&s.torque)),
-            ("force", span(&s.force)),
-            ("drive", s.drive.as_ref().map(|v| v.span())),
-            ("orientation", span(&s.orientation)),
-        ];
-        let allowed: &[&str] = match ty {
-            JointType::Revolute => &[
-                "absolute",
-                "angle",
-                "rate",
-                "stiffness",
-                "rest",
-                "damping",
-                "torque",
-                "drive",
-            ],
-            JointType::Prismatic => &[
-                "axis",
-                "position",
-                "speed",
-                "stiffness",
-                "rest",
-                "damping",
-                "force",
-                "drive",
-            ],
-            JointType::Translation => &["x", "y", "vx", "vy"],
-            JointType::Planar => &["x", "y", "angle", "vx", "vy", "rate"],
-            JointType::Fixed => &[],
-        };
-        let tyname = format!("{ty:?}").to_lowercase();
-        for (field, span) in present {
-            let Some(span) = span else { continue };
-            if field == "orientation" {
-                continue;
-            }
-            if !allowed.contains(&field) {
-                let mut fields = vec!["type", "parent", "at", "orientation"];
-                fields.extend_from_slice(allowed);
-                return Err(self.err(
-                    span,
-                    format!(
-                        "a {tyname} joint has no field `{field}` (its fields: {})",
-                        fields.join(", ")
-                    ),
-                ));
-            }
-        }
-        if s.drive.is_some() {
-            let driven = [
-                ("rate", span(&s.rate)),
-                ("speed", span(&s.speed)),
-                ("stiffness", span(&s.stiffness)),
-                ("rest", span(&s.rest)),
-                ("damping", span(&s.damping)),
-                ("torque", span(&s.torque)),
-                ("force", span(&s.force)),
-            ];
-            if let Some((field, Some(span))) = driven.into_iter().find(|(_, s)| s.is_some()) {
-                return Err(self.err(
-                    span,
-                    format!("a driven joint has no `{field}`: its motion is prescribed by `drive`, which supplies whatever force it takes"),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// A shape on a body and its pose in the body frame.
-    fn body_shape(&self, spec: &Spanned<ShapeSpec>) -> Result<(SharedShape, Pose), SceneError> {
-        let s = spec.get_ref();
-        let ty = *s.kind.get_ref();
-        let present = [
-            ("radius", s.radius.as_ref().map(|v| v.span())),
-            ("a", s.a.as_ref().map(|v| v.span())),
-            ("b", s.b.as_ref().map(|v| v.span())),
-            ("half_extents", s.half_extents.as_ref().map(|v| v.span())),
-            ("points", s.points.as_ref().map(|v| v.span())),
-            ("at", s.at.as_ref().map(|v| v.span())),
-            ("angle", s.angle.as_ref().map(|v| v.span())),
-        ];
-        let (allowed, required): (&[&str], &[&str]) = match ty {
-            ShapeType::Ball => (&["radius", "at"], &["radius"]),
-            ShapeType::Capsule => (&["a", "b", "radius"], &["a", "b", "radius"]),
-            ShapeType::Segment => (&["a", "b"], &["a", "b"]),
-            ShapeType::Cuboid => (&["half_extents", "at", "angle"], &["half_extents"]),
-            ShapeType::Polygon => (&["points", "at", "angle"], &["points"]),
-        };
-        let tyname = format!("{ty:?}").to_lowercase();
-        self.fields(&present, allowed, required, &tyname, s.kind.span())?;
-        let pose = Pose::new(
-            self.pair_or(&s.at, Vec2::ZERO)?,
-            self.quantity_or(&s.angle, Kind::Angle, 0.0)?,
-        );
-        let shape = match ty {
-            ShapeType::Ball => SharedShape::ball(self.radius(&s.radius)?),
-            ShapeType::Capsule => {
-                let (a, b) = self.segment(&s.a, &s.b)?;
-                SharedShape::capsule(a, b, self.radius(&s.radius)?)
-            }
-            ShapeType::Segment => {
-                let (a, b) = self.segment(&s.a, &s.b)?;
-                SharedShape::segment(a, b)
-            }
-            ShapeType::Cuboid => self.cuboid(&s.half_extents)?,
-            ShapeType::Polygon => self.polygon(&s.points)?,
-        };
-        Ok((shape, pose))
-    }
-
-    /// Rejects fields not in `allowed` and asks for those in `required`.
-    fn fields(
-        &self,
-        present: &[(&str, Option<Range<usize>>)],
-        allowed: &[&str],
-        required: &[&str],
-        what: &str,
-        type_span: Range<usize>,
-    ) -> Result<(), SceneError> {
-        for (field, span) in present {
-            if let Some(span) = span
-                && !allowed.contains(field)
-            {
-                return Err(self.err(
-                    span.clone(),
-                    format!(
-                        "a {what} has no field `{field}` (its fields: type, {})",
-                        allowed.join(", ")
-                    ),
-                ));
-            }
-        }
-        for field in required {
-            if present.iter().any(|(f, s)| f == field && s.is_none()) {
-                return Err(self.err(
-                    type_span,
-                    format!("a {what} needs `{}`", required.join("`, `")),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    fn radius(&self, r: &Option<Spanned<Real>>) -> Result<Real, SceneError> {
-        match r {
-            Some(r) => self.positive(r, "the radius", "m"),
-            None => Err(self.err(0..0, "missing radius")),
-        }
-    }
-
-    fn segment(
-        &self,
-        a: &Option<Spanned<Pair>>,
-        b: &Option<Spanned<Pair>>,
-    ) -> Result<(Vec2, Vec2), SceneError> {
-        let (Some(a), Some(b)) = (a, b) else {
-            return Err(self.err(0..0, "missing segment end"));
-        };
-        let (pa, pb) = (self.pair(a)?, self.pair(b)?);
-        if pa == pb {
-            return Err(self.err(b.span(), "the two ends `a` and `b` must differ"));
-        }
-        Ok((pa, pb))
-    }
-
-    fn cuboid(&self, h: &Option<Spanned<Pair>>) -> Result<SharedShape, SceneError> {
-        let Some(h) = h else {
-            return Err(self.err(0..0, "missing half extents"));
-        };
-        let v = self.pair(h)?;
-        if v.x > 0.0 && v.y > 0.0 {
-            Ok(SharedShape::cuboid(v.x, v.y))
-        } else {
-            Err(self.err(
-                h.span(),
-                format!(
-                    "the half extents must be positive, got [{}, {}] m",
-                    v.x, v.y
-                ),
-            ))
-        }
-    }
-
-    /// A convex polygon from its vertices (either orientation, at least 3, strictly convex).
-    fn polygon(&self, points: &Option<Spanned<Vec<Pair>>>) -> Result<SharedShape, SceneError> {
-        let Some(points) = points else {
-            return Err(self.err(0..0, "missing points"));
-        };
-        let mut pts = self.points(points, 3)?;
-        let area2: Real = (0..pts.len())
-            .map(|i| cross(pts[i], pts[(i + 1) % pts.len()]))
-            .sum();
-        if area2 < 0.0 {
-            pts.reverse();
-        }
-        let n = pts.len();
-        let convex = (0..n).all(|i| {
-            cross(
-                pts[(i + 1) % n] - pts[i],
-                pts[(i + 2) % n] - pts[(i + 1) % n],
-            ) > 0.0
-        });
-        if !convex {
-            return Err(self.err(
-                points.span(),
-                "the points must be the vertices of a convex polygon, in order, no three in line",
-            ));
-        }
-        SharedShape::convex_polyline(pts)
-            .ok_or_else(|| self.err(points.span(), "parry2d rejected this polygon"))
-    }
-
-    fn points(&self, points: &Spanned<Vec<Pair>>, min: usize) -> Result<Vec<Vec2>, SceneError> {
-        let pts: Vec<Vec2> = points
-            .get_ref()
-            .iter()
-            .map(|&[x, y]| Vec2::new(x, y))
-            .collect();
-        if pts.len() < min {
-            return Err(self.err(
-                points.span(),
-                format!("at least {min} points are needed, got {}", pts.len()),
-            ));
-        }
-        if pts.iter().any(|p| !p.is_finite()) {
-            return Err(self.err(points.span(), "the points must be finite"));
-        }
-        Ok(pts)
-    }
-
-    /// `[[obstacle]]`: a static shape of the world.
-    fn obstacle(&mut self, spec: &Spanned<ObstacleSpec>) -> Result<(), SceneError> {
-        let s = spec.get_ref();
-        let ty = *s.kind.get_ref();
-        let present = [
-            ("point", s.point.as_ref().map(|v| v.span())),
-            ("normal", s.normal.as_ref().map(|v| v.span())),
-            ("a", s.a.as_ref().map(|v| v.span())),
-            ("b", s.b.as_ref().map(|v| v.span())),
-            ("points", s.points.as_ref().map(|v| v.span())),
-            ("half_extents", s.half_extents.as_ref().map(|v| v.span())),
-            ("at", s.at.as_ref().map(|v| v.span())),
-            ("angle", s.angle.as_ref().map(|v| v.span())),
-        ];
-        let (allowed, required): (&[&str], &[&str]) = match ty {
-            ObstacleType::Halfspace => (&["point", "normal"], &["point", "normal"]),
-            ObstacleType::Segment => (&["a", "b"], &["a", "b"]),
-            ObstacleType::Polyline => (&["points"], &["points"]),
-            ObstacleType::Cuboid => (&["half_extents", "at", "angle"], &["half_extents"]),
-        };
-        let tyname = format!("{ty:?} obstacle").to_lowercase();
-        self.fields(&present, allowed, required, &tyname, s.kind.span())?;
-        let (shape, pose) = match ty {
-            ObstacleType::Halfspace => {
-                let (Some(point), Some(normal)) = (&s.point, &s.normal) else {
-                    return Err(self.err(s.kind.span(), "missing point or normal"));
-                };
-                let n = self.pair(normal)?;
-                let n = n
-                    .try_normalize()
-                    .ok_or_else(|| self.err(normal.span(), "the normal must not be zero"))?;
-                (
-                    SharedShape::halfspace(n),
-                    Pose::from_translation(self.pair(point)?),
-                )
-            }
-            ObstacleType::Segment => {
-                let (a, b) = self.segment(&s.a, &s.b)?;
-                (SharedShape::segment(a, b), Pose::IDENTITY)
-            }
-            ObstacleType::Polyline => {
-                let Some(points) = &s.points else {
-                    return Err(self.err(s.kind.span(), "missing points"));
-                };
-                (
-                    SharedShape::polyline(self.points(points, 2)?, None),
-                    Pose::IDENTITY,
-                )
-            }
-            ObstacleType::Cuboid => (
-                self.cuboid(&s.half_extents)?,
-                Pose::new(
-                    self.pair_or(&s.at, Vec2::ZERO)?,
-                    self.quantity_or(&s.angle, Kind::Angle, 0.0)?,
-                ),
-            ),
-        };
-        let name = s.name.get_ref().clone();
-        let id = self.add_collider(Collider::new(&name, None, shape, pose), s.kind.span());
-        self.name(&s.name, Named::Obstacle(id))
-    }
-
     /// `[contact]`: the default material and the pair rules. Returns the overlap tolerance.
-    fn contact(&mut self, spec: Option<&Spanned<ContactSpec>>) -> Result<Real, SceneError> {
+    pub(super) fn contact(
+        &mut self,
+        spec: Option<&Spanned<ContactSpec>>,
+    ) -> Result<Real, SceneError> {
         let Some(spec) = spec else {
             return Ok(DEFAULT_OVERLAP_TOLERANCE);
         };
@@ -869,11 +396,7 @@ impl Builder<'_> {
             if a.get_ref() == b.get_ref() {
                 return Err(self.err(p.between.span(), "a pair needs two different names"));
             }
-            if ca
-                .iter()
-                .chain(&cb)
-                .all(|&c| self.collider_spans.len() > c.index() && !self.is_body_collider(c))
-            {
+            if !ca.iter().chain(&cb).any(|&c| self.is_body_collider(c)) {
                 return Err(self.err(p.between.span(), "two obstacles of the world never touch"));
             }
             let material = Material {
@@ -901,12 +424,15 @@ impl Builder<'_> {
         }
     }
 
-    fn is_body_collider(&self, c: ColliderId) -> bool {
+    pub(super) fn is_body_collider(&self, c: ColliderId) -> bool {
         self.body_colliders.values().any(|v| v.contains(&c))
     }
 
     /// The colliders of the body or obstacle `name`.
-    fn colliders_named(&self, name: &Spanned<String>) -> Result<Vec<ColliderId>, SceneError> {
+    pub(super) fn colliders_named(
+        &self,
+        name: &Spanned<String>,
+    ) -> Result<Vec<ColliderId>, SceneError> {
         match self.names.get(name.get_ref()) {
             Some(Named::Obstacle(c)) => Ok(vec![*c]),
             Some(Named::Body(b)) => match self.body_colliders.get(b) {
@@ -923,7 +449,7 @@ impl Builder<'_> {
         }
     }
 
-    fn restitution(&self, e: &Spanned<Real>) -> Result<Real, SceneError> {
+    pub(super) fn restitution(&self, e: &Spanned<Real>) -> Result<Real, SceneError> {
         let x = *e.get_ref();
         if x.is_finite() && (0.0..=1.0).contains(&x) {
             Ok(x)
@@ -935,7 +461,7 @@ impl Builder<'_> {
         }
     }
 
-    fn friction(&self, mu: &Spanned<Real>) -> Result<Real, SceneError> {
+    pub(super) fn friction(&self, mu: &Spanned<Real>) -> Result<Real, SceneError> {
         let x = *mu.get_ref();
         if x.is_finite() && x >= 0.0 {
             Ok(x)

@@ -28,8 +28,11 @@
 //! ```
 
 mod build;
+mod chain;
 mod error;
 mod format;
+mod joint;
+mod shape;
 mod units;
 
 use std::path::{Path, PathBuf};
