@@ -12,12 +12,12 @@ use crate::model::ModelError;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The file cannot be read.
-    #[error("{path}: {source}", path = path.display())]
+    #[error("{path}: cannot read the scene: {error}", path = path.display())]
     Io {
         /// The scene file.
         path: PathBuf,
         /// The I/O error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A syntax error, a type error, an unknown or missing field, or a value that fails
     /// validation, located in the file.
@@ -36,12 +36,12 @@ pub enum SceneError {
         message: String,
     },
     /// The model builder rejected the scene (a check the scene loader does not repeat).
-    #[error("{path}: {source}", path = path.display())]
+    #[error("{path}: {error}", path = path.display())]
     Model {
         /// The scene file.
         path: PathBuf,
         /// The model error.
-        source: ModelError,
+        error: ModelError,
     },
 }
 
@@ -100,7 +100,7 @@ impl Locator<'_> {
     pub fn model(&self, err: ModelError) -> SceneError {
         SceneError::Model {
             path: self.path.to_owned(),
-            source: err,
+            error: err,
         }
     }
 }

@@ -88,9 +88,9 @@ pub fn load_str(text: &str, path: impl AsRef<Path>) -> Result<Scene, SceneError>
 }
 
 fn load_with(path: &Path, overrides: Overrides) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let text = std::fs::read_to_string(path).map_err(|error| SceneError::Io {
         path: path.to_owned(),
-        source,
+        error,
     })?;
     parse(text, path, overrides)
 }

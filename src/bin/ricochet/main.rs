@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod check;
 mod impact;
 
 /// Planar multibody simulator with event-driven rigid impacts.
@@ -18,12 +19,15 @@ struct Cli {
 enum Command {
     /// Solve one-point impact problems read as JSON Lines from standard input.
     Impact(impact::Args),
+    /// Validate a scene and print its coordinates, initial state, mass matrix and energies as JSON.
+    Check(check::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Impact(args) => impact::run(args),
+        Command::Check(args) => check::run(args),
     };
     match result {
         Ok(code) => code,
