@@ -67,13 +67,15 @@ pub enum DynamicsError {
     NotFactored,
 }
 
-/// The Cholesky factorization `M = Uᵀ U` (`U` upper triangular) of the mass matrix, kept in
+/// The Cholesky factorization `M = L Lᵀ` (`L` lower triangular) of the mass matrix, kept in
 /// a preallocated buffer so that refactoring allocates nothing. The impact map solves
 /// `M x = b` with it for several right-hand sides (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
 #[derive(Clone, Debug)]
 pub struct MassFactor {
-    /// `U`, upper triangle (the strict lower triangle is not used).
-    u: DMatrix<Real>,
+    /// `L`, lower triangle (the strict upper triangle is not used).
+    l: DMatrix<Real>,
+    /// `1 / L_jj`: multiplying by it keeps divisions out of the inner loops.
+    inv_diag: Vec<Real>,
     /// `true` after a successful factorization.
     valid: bool,
 }
@@ -82,7 +84,8 @@ impl MassFactor {
     /// A factor buffer for an `n × n` matrix, not yet valid.
     pub fn new(n: usize) -> Self {
         MassFactor {
-            u: DMatrix::zeros(n, n),
+            l: DMatrix::zeros(n, n),
+            inv_diag: vec![0.0; n],
             valid: false,
         }
     }
@@ -92,17 +95,18 @@ impl MassFactor {
         self.valid
     }
 
-    /// The upper triangular factor `U` of `M = Uᵀ U`.
-    pub fn upper(&self) -> &DMatrix<Real> {
-        &self.u
+    /// The lower triangular factor `L` of `M = L Lᵀ` (its strict upper triangle holds
+    /// nothing meaningful).
+    pub fn lower(&self) -> &DMatrix<Real> {
+        &self.l
     }
 
-    /// Factors the symmetric matrix `m` (its upper triangle is read) in place into
-    /// `M = Uᵀ U` (Cholesky–Crout, column by column):
+    /// Factors the symmetric matrix `m` (its lower triangle is read) in place into
+    /// `M = L Lᵀ`, column by column with column updates (left-looking, "jki"):
     ///
     /// ```text
-    /// U_ij = (M_ij − Σ_{k<i} U_ki U_kj) / U_ii      (i < j)
-    /// U_jj = √(M_jj − Σ_{k<j} U_kj²)
+    /// c = M[j.., j] − Σ_{k<j} L_jk L[j.., k]      (one axpy per k, contiguous columns)
+    /// L_jj = √c_j,   L[j+1.., j] = c[j+1..] / L_jj
     /// ```
     ///
     /// Returns the failing pivot and its value if a pivot is not positive (or not finite).
@@ -110,51 +114,60 @@ impl MassFactor {
         self.valid = false;
         let n = m.nrows();
         let src = m.as_slice();
-        let u = self.u.as_mut_slice();
+        let l = self.l.as_mut_slice();
         for j in 0..n {
-            for i in 0..=j {
-                // Columns i and j of U are contiguous (column-major): dot over k < i.
-                let mut s = src[j * n + i];
-                for k in 0..i {
-                    s -= u[i * n + k] * u[j * n + k];
-                }
-                if i < j {
-                    u[j * n + i] = s / u[i * n + i];
-                } else if s > 0.0 && s.is_finite() {
-                    u[j * n + j] = s.sqrt();
-                } else {
-                    return Err((j, s));
+            // Columns 0..j of L (done) and column j (being computed), contiguous.
+            let (done, rest) = l.split_at_mut(j * n);
+            let col_j = &mut rest[j..n];
+            col_j.copy_from_slice(&src[j * n + j..j * n + n]);
+            for k in 0..j {
+                let col_k = &done[k * n + j..k * n + n];
+                let ljk = col_k[0];
+                for (c, x) in col_j.iter_mut().zip(col_k) {
+                    *c -= ljk * x;
                 }
             }
+            let d = col_j[0];
+            if !(d > 0.0 && d.is_finite()) {
+                return Err((j, d));
+            }
+            let ljj = d.sqrt();
+            let inv = 1.0 / ljj;
+            col_j[0] = ljj;
+            for c in &mut col_j[1..] {
+                *c *= inv;
+            }
+            self.inv_diag[j] = inv;
         }
         self.valid = true;
         Ok(())
     }
 
-    /// Solves `M x = b` in place (`b` becomes `x`): `Uᵀ y = b` forward, then `U x = y`
+    /// Solves `M x = b` in place (`b` becomes `x`): `L y = b` forward, then `Lᵀ x = y`
     /// backward.
     pub fn solve_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
-        let n = self.u.nrows();
+        let n = self.l.nrows();
         check_len("right-hand side", n, b.len())?;
-        let u = self.u.as_slice();
-        // Uᵀ y = b: y_j = (b_j − Σ_{k<j} U_kj y_k) / U_jj.
+        let l = self.l.as_slice();
+        // L y = b, column by column: y_j = b_j / L_jj, then b[j+1..] −= L[j+1.., j] y_j.
         for j in 0..n {
-            let mut s = b[j];
-            for k in 0..j {
-                s -= u[j * n + k] * b[k];
+            b[j] *= self.inv_diag[j];
+            let yj = b[j];
+            for (bk, lkj) in b[j + 1..].iter_mut().zip(&l[j * n + j + 1..j * n + n]) {
+                *bk -= lkj * yj;
             }
-            b[j] = s / u[j * n + j];
         }
-        // U x = y, column by column from the last: x_j = y_j / U_jj, then y_k −= U_kj x_j.
+        // Lᵀ x = y from the last: x_j = (y_j − Σ_{k>j} L_kj x_k) / L_jj.
         for j in (0..n).rev() {
-            b[j] /= u[j * n + j];
-            let xj = b[j];
-            for k in 0..j {
-                b[k] -= u[j * n + k] * xj;
-            }
+            let below: Real = l[j * n + j + 1..j * n + n]
+                .iter()
+                .zip(&b[j + 1..])
+                .map(|(lkj, xk)| lkj * xk)
+                .sum();
+            b[j] = (b[j] - below) * self.inv_diag[j];
         }
         Ok(())
     }
@@ -216,31 +229,35 @@ pub fn mass_matrix(model: &Model, data: &mut Data) {
             data.composite[p.index()] += ic;
         }
     }
-    // Rows: for each free coordinate, the wrench I^c S walked up to the root.
-    data.mass.fill(0.0);
+    // Rows: for each free coordinate, the wrench I^c S walked up to the root. M is
+    // symmetric; both triangles are written (column-major slice, M_rc at c·nu + r).
+    let nu = model.nu();
+    let (subspace, frames, composite) = (&data.subspace, &data.joint_frame, &data.composite);
+    let mass = data.mass.as_mut_slice();
+    mass.fill(0.0);
     for (i, joint) in joints.iter().enumerate() {
         let Some(si) = model.q_index(JointId(i)) else {
             continue;
         };
         for k in 0..joint.kind.ndof() {
             let r = si + k;
-            let mut f = data.composite[i].mul_twist(&data.subspace[i][k]);
+            let mut f = composite[i].mul_twist(&subspace[i][k]);
             for k2 in 0..=k {
-                let m = data.subspace[i][k2].dot(&f);
-                data.mass[(r, si + k2)] = m;
-                data.mass[(si + k2, r)] = m;
+                let m = subspace[i][k2].dot(&f);
+                mass[(si + k2) * nu + r] = m;
+                mass[r * nu + si + k2] = m;
             }
             let mut b = i;
             while let Some(p) = joints[b].parent {
                 if joints[b].is_absolute() {
-                    f = f.projected_at(data.joint_frame[b].translation);
+                    f = f.projected_at(frames[b].translation);
                 }
                 b = p.index();
                 if let Some(sp) = model.q_index(JointId(b)) {
                     for k2 in 0..joints[b].kind.ndof() {
-                        let m = data.subspace[b][k2].dot(&f);
-                        data.mass[(r, sp + k2)] = m;
-                        data.mass[(sp + k2, r)] = m;
+                        let m = subspace[b][k2].dot(&f);
+                        mass[(sp + k2) * nu + r] = m;
+                        mass[r * nu + sp + k2] = m;
                     }
                 }
             }
@@ -385,7 +402,7 @@ pub fn forward_dynamics(
 /// u̇ = M(q)⁻¹ (τ − h(t, q, u))
 /// ```
 ///
-/// through the Cholesky factorization `M = Uᵀ U` ([P, Eq. (1)] with `M = −M_paper`).
+/// through the Cholesky factorization `M = L Lᵀ` ([P, Eq. (1)] with `M = −M_paper`).
 /// Stages: check the input, kinematics, [`mass_matrix`], [`bias_forces`], factor, solve.
 /// `tau` is an optional generalized force [nu] (N, N·m), zero if `None`. Allocates nothing.
 ///
@@ -413,7 +430,7 @@ pub fn forward_dynamics_with(
     update_velocities(model, data, u)?;
     mass_matrix(model, data);
     bias_forces(model, data);
-    // M = Uᵀ U.
+    // M = L Lᵀ.
     data.mass_factor
         .factor(&data.mass)
         .map_err(|(pivot, value)| DynamicsError::NotPositiveDefinite { t, pivot, value })?;

@@ -99,7 +99,7 @@ pub struct Data {
     /// Mass matrix `M(q)` [nu × nu] (kg, kg·m, kg·m²), symmetric positive definite
     /// (`M = −M_paper`, [P, Eq. (68)]). Written by `dynamics::mass_matrix`.
     pub mass: DMatrix<Real>,
-    /// Cholesky factor of `M`, `M = Uᵀ U`. Written by `dynamics::forward_dynamics`;
+    /// Cholesky factor of `M`, `M = L Lᵀ`. Written by `dynamics::forward_dynamics`;
     /// use it with [`crate::dynamics::solve_mass`].
     pub mass_factor: MassFactor,
     /// Bias forces `h(t, q, u)` [nu] (N, N·m): velocity products, gravity, force elements

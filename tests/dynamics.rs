@@ -504,9 +504,9 @@ fn the_factor_solves_mass_systems_and_reports_failures() {
     let mut x = rhs.clone();
     solve_mass(&data, x.as_mut_slice()).unwrap();
     assert!((&data.mass * &x - &rhs).amax() < 1e-12 * (1.0 + max_abs(&data.mass) * x.amax()));
-    let u_fac = data.mass_factor.upper().clone();
-    let upper = DMatrix::from_fn(n, n, |i, j| if i <= j { u_fac[(i, j)] } else { 0.0 });
-    assert!(max_abs(&(upper.transpose() * &upper - &data.mass)) < 1e-12 * max_abs(&data.mass));
+    let l_fac = data.mass_factor.lower().clone();
+    let lower = DMatrix::from_fn(n, n, |i, j| if i >= j { l_fac[(i, j)] } else { 0.0 });
+    assert!(max_abs(&(&lower * lower.transpose() - &data.mass)) < 1e-12 * max_abs(&data.mass));
 
     // A matrix that is not positive definite is reported with its pivot and t.
     data.mass.fill(0.0);
