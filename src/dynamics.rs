@@ -404,7 +404,7 @@ pub fn forward_dynamics(
 ///
 /// through the Cholesky factorization `M = L Lᵀ` ([P, Eq. (1)] with `M = −M_paper`).
 /// Stages: check the input, kinematics, [`mass_matrix`], [`bias_forces`], factor, solve.
-/// `tau` is an optional generalized force [nu] (N, N·m), zero if `None`. Allocates nothing.
+/// `tau` is an optional generalized force `[nu]` (N, N·m), zero if `None`. Allocates nothing.
 ///
 /// Writes every kinematics field, `data.mass`, `data.mass_factor`, `data.bias` and
 /// `data.udot`. The factor stays valid for [`solve_mass`] until the next call.

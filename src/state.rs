@@ -14,10 +14,10 @@ use crate::model::spatial::{Inertia, Twist, Wrench};
 pub struct State {
     /// Time `t` (s).
     pub t: Real,
-    /// Generalized coordinates `q` [nq] (m, rad), in the order of
+    /// Generalized coordinates `q` `[nq]` (m, rad), in the order of
     /// [`Model::coordinates`].
     pub q: DVector<Real>,
-    /// Generalized speeds `u = q̇` [nu] (m/s, rad/s).
+    /// Generalized speeds `u = q̇` `[nu]` (m/s, rad/s).
     pub u: DVector<Real>,
 }
 
@@ -49,67 +49,67 @@ impl State {
 pub struct Data {
     /// Time of the last [`crate::kinematics::update_positions`] (s).
     pub time: Real,
-    /// Joint coordinates, free and prescribed [nbody][3] (m, rad).
+    /// Joint coordinates, free and prescribed `[nbody][3]` (m, rad).
     /// Written by `update_positions`.
     pub joint_q: Vec<[Real; 3]>,
-    /// Joint coordinate rates [nbody][3] (m/s, rad/s). Written by `update_velocities`.
+    /// Joint coordinate rates `[nbody][3]` (m/s, rad/s). Written by `update_velocities`.
     pub joint_qd: Vec<[Real; 3]>,
-    /// Prescribed joint accelerations, zero for free joints [nbody][3] (m/s², rad/s²).
+    /// Prescribed joint accelerations, zero for free joints `[nbody][3]` (m/s², rad/s²).
     /// Written by `update_positions`.
     pub joint_qdd_prescribed: Vec<[Real; 3]>,
-    /// World pose of each joint frame [nbody]; its translation is the joint's position
+    /// World pose of each joint frame `[nbody]`; its translation is the joint's position
     /// `a` (m). Written by `update_positions`.
     pub joint_frame: Vec<Pose>,
-    /// Motion subspace columns `S` of each joint [nbody][3]: the twist the body gains per
+    /// Motion subspace columns `S` of each joint `[nbody][3]`: the twist the body gains per
     /// unit rate of each joint coordinate (world, referred to `O`). Written by
     /// `update_positions`.
     pub subspace: Vec<[Twist; 3]>,
-    /// World pose of each body frame [nbody]. Written by `update_positions`.
+    /// World pose of each body frame `[nbody]`. Written by `update_positions`.
     pub body_pose: Vec<Pose>,
-    /// World position of each body's centre of mass [nbody] (m). Written by
+    /// World position of each body's centre of mass `[nbody]` (m). Written by
     /// `update_positions`.
     pub body_com: Vec<Vec2>,
-    /// Spatial inertia of each body [nbody] (world, referred to `O`). Written by
+    /// Spatial inertia of each body `[nbody]` (world, referred to `O`). Written by
     /// `update_positions`.
     pub body_inertia: Vec<Inertia>,
-    /// Twist of each body [nbody] (rad/s, m/s; world, referred to `O`), including the
+    /// Twist of each body `[nbody]` (rad/s, m/s; world, referred to `O`), including the
     /// prescribed motions. Written by `update_velocities`.
     pub body_twist: Vec<Twist>,
-    /// Remainder twist of each body [nbody]: its twist when `u = 0`, due to the prescribed
+    /// Remainder twist of each body `[nbody]`: its twist when `u = 0`, due to the prescribed
     /// motions alone (rad/s, m/s) — the `v_t` of [P, Eq. (2)]. Written by
     /// `update_velocities`.
     pub body_twist_remainder: Vec<Twist>,
-    /// Velocity-product part of each body's spatial acceleration [nbody] (rad/s², m/s²):
+    /// Velocity-product part of each body's spatial acceleration `[nbody]` (rad/s², m/s²):
     /// `A_b = P_b A_parent + c_b + Σ S q̈` holds `c_b = Ṗ_b V_parent + Σ Ṡ q̇`. Written by
     /// `update_velocities`.
     pub body_accel_vp: Vec<Twist>,
-    /// Spatial acceleration of each body [nbody] (rad/s², m/s²) in the last
+    /// Spatial acceleration of each body `[nbody]` (rad/s², m/s²) in the last
     /// Newton–Euler pass. Written by `dynamics`.
     pub body_accel: Vec<Twist>,
-    /// Net wrench transmitted by each body's joint in the last Newton–Euler pass [nbody]
+    /// Net wrench transmitted by each body's joint in the last Newton–Euler pass `[nbody]`
     /// (N·m, N; referred to `O`). Written by `dynamics`.
     pub body_wrench: Vec<Wrench>,
-    /// Composite inertia of each body's subtree as seen through its joint [nbody]
+    /// Composite inertia of each body's subtree as seen through its joint `[nbody]`
     /// (referred to `O`). Written by `dynamics::mass_matrix`.
     pub composite: Vec<Inertia>,
-    /// Joint efforts of the last Newton–Euler pass [nbody][3] (N·m, N): the generalized
+    /// Joint efforts of the last Newton–Euler pass `[nbody][3]` (N·m, N): the generalized
     /// inertia and gravity forces `S_kᵀ F`; for prescribed joints after
     /// `dynamics::power`, the effort the drive exerts. Written by `dynamics`.
     pub joint_effort: Vec<[Real; 3]>,
-    /// Mass matrix `M(q)` [nu × nu] (kg, kg·m, kg·m²), symmetric positive definite
+    /// Mass matrix `M(q)` `[nu × nu]` (kg, kg·m, kg·m²), symmetric positive definite
     /// (`M = −M_paper`, [P, Eq. (68)]). Written by `dynamics::mass_matrix`.
     pub mass: DMatrix<Real>,
     /// Cholesky factor of `M`, `M = L Lᵀ`. Written by `dynamics::forward_dynamics`;
     /// use it with [`crate::dynamics::solve_mass`].
     pub mass_factor: MassFactor,
-    /// Bias forces `h(t, q, u)` [nu] (N, N·m): velocity products, gravity, force elements
+    /// Bias forces `h(t, q, u)` `[nu]` (N, N·m): velocity products, gravity, force elements
     /// and the coupling to the prescribed accelerations, so that `M u̇ = τ − h`. Written by
     /// `dynamics::bias_forces`.
     pub bias: DVector<Real>,
-    /// Generalized accelerations `u̇` [nu] (m/s², rad/s²). Written by
+    /// Generalized accelerations `u̇` `[nu]` (m/s², rad/s²). Written by
     /// `dynamics::forward_dynamics`.
     pub udot: DVector<Real>,
-    /// Generalized forces of the last inverse dynamics `M u̇ + h` [nu] (N, N·m). Written
+    /// Generalized forces of the last inverse dynamics `M u̇ + h` `[nu]` (N, N·m). Written
     /// by `dynamics::inverse_dynamics`.
     pub tau: DVector<Real>,
 }

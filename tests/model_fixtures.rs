@@ -3,11 +3,8 @@
 //! holds no test.
 #![allow(dead_code)]
 
-use parry2d_f64::shape::SharedShape;
 use ricochet::math::{Pose, Real, Vec2};
-use ricochet::model::{
-    Body, BodyId, Collider, Joint, JointForce, JointKind, Model, PrescribedMotion,
-};
+use ricochet::model::{Body, BodyId, Joint, JointForce, JointKind, Model, PrescribedMotion};
 
 /// A small deterministic generator (xorshift64*), so that failures reproduce.
 pub struct Rng(u64);
@@ -198,10 +195,4 @@ pub fn random_tree(seed: u64, opts: TreeOptions, world: Pose) -> Model {
         );
     }
     b.build().expect("random tree")
-}
-
-/// Adds nothing to the model but a collider, to check that colliders do not change the
-/// dynamics (used by the scene tests too).
-pub fn ball_collider(name: &str, body: Option<BodyId>, r: Real) -> Collider {
-    Collider::new(name, body, SharedShape::ball(r), Pose::identity())
 }

@@ -597,3 +597,106 @@ fn a_scene_with_shapes_needs_a_contact_table_and_io_errors_name_the_file() {
     assert!(matches!(err, SceneError::Io { .. }));
     assert!(err.to_string().starts_with("no/such/scene.toml: "), "{err}");
 }
+
+#[test]
+fn pair_rules_drives_springs_and_bodies_hung_on_a_chain() {
+    // A 3-link chain with a bob welded to its last link, a driven slider with a spring-free
+    // joint, and pair rules: the bob may touch link2's parent–child neighbour link3 only
+    // because the file says so; link1–floor is disabled; link2–floor has its own material.
+    let text = r#"
+version = 1
+name = "rules"
+[run]
+t_end = 1.0
+[contact]
+law = "poisson"
+e = 0.5
+mu = 0.2
+[[contact.pair]]
+between = ["bob", "link3"]
+enabled = true
+[[contact.pair]]
+between = ["link1", "floor"]
+enabled = false
+[[contact.pair]]
+between = ["link2", "floor"]
+law = "stronge"
+e = 0.9
+[chain]
+links = 3
+length = 0.5
+mass = 0.2
+radius = 0.01
+[[body]]
+name = "bob"
+mass = 1.0
+inertia = 0.001
+joint = { type = "fixed", parent = "link3", at = [0.0, -0.6] }
+[[body.shape]]
+type = "ball"
+radius = 0.05
+[[body]]
+name = "slider"
+mass = 2.0
+inertia = 0.1
+joint = { type = "prismatic", axis = [1.0, 0.0], position = 0.1, drive = { rate = 0.5, amplitude = 0.2, angular_frequency = "1 Hz", phase = "90 deg" } }
+[[body]]
+name = "arm"
+mass = 0.5
+com = [0.0, -0.2]
+inertia = 0.01
+joint = { type = "revolute", parent = "slider", stiffness = 10.0, rest = "-30 deg", damping = 0.1, torque = 0.5 }
+[[obstacle]]
+name = "floor"
+type = "halfspace"
+point = [0.0, -3.0]
+normal = [0.0, 1.0]
+"#;
+    let s = scene::load_str(text, "rules.toml").unwrap_or_else(|e| panic!("{e}"));
+    let m = &s.model;
+    let names: Vec<&str> = m.coordinates().iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["link1.q", "link2.q", "link3.q", "arm.q"]);
+    let pairs: Vec<(String, String, &str, Real)> = m
+        .pairs()
+        .iter()
+        .map(|p| {
+            (
+                m.colliders()[p.a.index()].name.clone(),
+                m.colliders()[p.b.index()].name.clone(),
+                p.material.law.name(),
+                p.material.e,
+            )
+        })
+        .collect();
+    let has = |a: &str, b: &str| {
+        pairs
+            .iter()
+            .find(|p| (p.0 == a && p.1 == b) || (p.0 == b && p.1 == a))
+    };
+    assert!(has("link1", "floor").is_none(), "{pairs:?}");
+    assert_eq!(
+        has("link2", "floor").map(|p| (p.2, p.3)),
+        Some(("stronge", 0.9))
+    );
+    assert_eq!(
+        has("link3", "floor").map(|p| (p.2, p.3)),
+        Some(("poisson", 0.5))
+    );
+    assert!(
+        has("bob", "link3").is_some(),
+        "parent–child pair enabled by the file"
+    );
+    assert!(has("link1", "link3").is_some() && has("link1", "link2").is_none());
+    // The drive: q(t) = 0.1 + 0.5 t + 0.2 sin(2π t + π/2).
+    let slider = m.joint(m.body_by_name("slider").unwrap().joint()).unwrap();
+    let drive = slider.drive.unwrap();
+    assert_eq!((drive.q0, drive.rate, drive.amplitude), (0.1, 0.5, 0.2));
+    assert!((drive.angular_frequency - 2.0 * std::f64::consts::PI).abs() < 1e-15);
+    assert!((drive.phase - 90.0 * DEG).abs() < 1e-15);
+    let arm = m.joint(m.body_by_name("arm").unwrap().joint()).unwrap();
+    assert_eq!(
+        (arm.force.stiffness, arm.force.damping, arm.force.effort),
+        (10.0, 0.1, 0.5)
+    );
+    assert!((arm.force.rest - -30.0 * DEG).abs() < 1e-15);
+}
