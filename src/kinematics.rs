@@ -355,7 +355,8 @@ pub fn point_velocity(
 /// joint position `a` whenever an absolute revolute joint is crossed (the ancestors only
 /// translate what lies behind it). The other columns are zero.
 ///
-/// Requires [`update_positions`]. `jac` must have `nu` columns.
+/// Requires [`update_positions`]. `jac` must have `nu` columns. For a point given in the
+/// body's frame, get its world position with [`point_world`] first.
 pub fn point_jacobian(
     model: &Model,
     data: &Data,

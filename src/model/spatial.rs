@@ -1,5 +1,5 @@
 //! Planar spatial algebra: twists, wrenches and rigid-body inertias in world coordinates,
-//! referred to the world origin `O` [F, §2.16].
+//! referred to the world origin `O` [F, ch. 2, planar vectors].
 //!
 //! A planar rigid motion has three components, one angular and two linear, and so has a
 //! planar force system. All three types here are expressed in the world frame and referred
@@ -86,7 +86,7 @@ impl Twist {
     }
 
     /// The spatial cross product for motions, `(ω₁, v₁) ×ₘ (ω₂, v₂) = (0, ω₁ perp(v₂) −
-    /// ω₂ perp(v₁))` [F, Eq. (2.74), planar]: the rate of change of a twist `m₂` fixed in a
+    /// ω₂ perp(v₁))` ([F, ch. 2], planar form): the rate of change of a twist `m₂` fixed in a
     /// body that moves with this twist.
     #[inline]
     pub fn cross_motion(&self, m: &Twist) -> Twist {
@@ -94,7 +94,7 @@ impl Twist {
     }
 
     /// The spatial cross product for forces, `(ω, v) ×* (n, f) = (v × f, ω perp(f))`
-    /// [F, Eq. (2.75), planar], with `v × f = v_x f_y − v_y f_x`.
+    /// ([F, ch. 2], planar form), with `v × f = v_x f_y − v_y f_x`.
     #[inline]
     pub fn cross_force(&self, f: &Wrench) -> Wrench {
         Wrench::new(cross(self.v, f.f), perp(f.f) * self.w)
@@ -211,7 +211,7 @@ impl Sub for Wrench {
 }
 
 /// The planar spatial inertia of a rigid body (or of a group of bodies) in world
-/// coordinates, referred to the world origin `O` [F, §2.16]:
+/// coordinates, referred to the world origin `O` [F, ch. 2, planar vectors]:
 ///
 /// ```text
 ///        ⎡ I_O        m perp(c)ᵀ ⎤
