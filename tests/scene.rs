@@ -543,6 +543,14 @@ fn bad_scenes_are_rejected_with_the_field_and_its_line() {
             "the name `rod` is used twice",
         ),
         bad_extra(
+            "pair of two obstacles",
+            "\n[[obstacle]]\nname = \"wall\"\ntype = \"segment\"\na = [5.0, -3.0]\nb = [5.0, 3.0]\n\
+             [[contact.pair]]\nbetween = [\"floor\", \"wall\"] # obstacles\n",
+            "# obstacles",
+            "contact.pair[0].between",
+            "two obstacles of the world never touch",
+        ),
+        bad_extra(
             "pair with an unknown name",
             "\n[[contact.pair]]\nbetween = [\"rod\", \"ceiling\"]\n",
             "ceiling",

@@ -396,7 +396,11 @@ impl Builder<'_> {
             if a.get_ref() == b.get_ref() {
                 return Err(self.err(p.between.span(), "a pair needs two different names"));
             }
-            if !ca.iter().chain(&cb).any(|&c| self.is_body_collider(c)) {
+            if !ca
+                .iter()
+                .chain(&cb)
+                .any(|&c| self.model.colliders()[c.index()].body.is_some())
+            {
                 return Err(self.err(p.between.span(), "two obstacles of the world never touch"));
             }
             let material = Material {
@@ -422,10 +426,6 @@ impl Builder<'_> {
                 format!("the overlap tolerance must be ≥ 0, got {} m", t.get_ref()),
             )),
         }
-    }
-
-    pub(super) fn is_body_collider(&self, c: ColliderId) -> bool {
-        self.body_colliders.values().any(|v| v.contains(&c))
     }
 
     /// The colliders of the body or obstacle `name`.

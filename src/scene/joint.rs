@@ -138,7 +138,7 @@ impl Builder<'_> {
         ty: JointType,
     ) -> Result<(), SceneError> {
         let span = |v: &Option<Spanned<Quantity>>| v.as_ref().map(|v| v.span());
-        let present: [(&str, Option<Range<usize>>); 17] = [
+        let present: [(&str, Option<Range<usize>>); 16] = [
             ("absolute", s.absolute.as_ref().map(|v| v.span())),
             ("axis", s.axis.as_ref().map(|v| v.span())),
             ("angle", span(&s.angle)),
@@ -155,7 +155,6 @@ impl Builder<'_> {
             ("torque", span(&s.torque)),
             ("force", span(&s.force)),
             ("drive", s.drive.as_ref().map(|v| v.span())),
-            ("orientation", span(&s.orientation)),
         ];
         let allowed: &[&str] = match ty {
             JointType::Revolute => &[
@@ -185,9 +184,6 @@ impl Builder<'_> {
         let tyname = format!("{ty:?}").to_lowercase();
         for (field, span) in present {
             let Some(span) = span else { continue };
-            if field == "orientation" {
-                continue;
-            }
             if !allowed.contains(&field) {
                 let mut fields = vec!["type", "parent", "at", "orientation"];
                 fields.extend_from_slice(allowed);
