@@ -1,1 +1,569 @@
-//! Placeholder: filled in by its own issue.
+//! Equations of motion: the mass matrix `M(q)`, the bias forces `h(t, q, u)`, forward and
+//! inverse dynamics, energies and powers.
+//!
+//! The equations of motion are Kane's equations [P, Eq. (1)] with the usual sign,
+//!
+//! ```text
+//! M(q) u̇ = τ − h(t, q, u)
+//! ```
+//!
+//! with `M = −M_paper` symmetric positive definite ([P, Eq. (68)], `paper/ERRATA.md`),
+//! `τ` the generalized forces supplied by the caller (e.g. contact forces) and `h`
+//! everything the model itself knows: velocity products, gravity, joint springs, dampers
+//! and efforts, and the coupling to prescribed accelerations.
+//!
+//! The kernels follow the Model/Data pattern: `algo(&Model, &mut Data, …)` writes its
+//! result into `data` and says which earlier stage it needs.
+//!
+//! ## Prescribed motion
+//!
+//! Over all joint coordinates (free `f` and prescribed `p`) the equations read
+//! `M_ff u̇_f + M_fp q̈_p + h_f = τ_f` and `M_pf u̇_f + M_pp q̈_p + h_p = Q_p`, where `Q_p` is
+//! the effort of the drives. Only the free rows are integrated: the Newton–Euler pass that
+//! computes `h` runs with the prescribed accelerations `q̈_p(t)` in place, so `h` contains
+//! `M_fp q̈_p`. The drive efforts `Q_p` come from the same pass run with the solved `u̇`
+//! ([`power`]).
+
+use nalgebra::DMatrix;
+
+use crate::kinematics::{KinematicsError, check_len, update_positions, update_velocities};
+use crate::math::Real;
+use crate::model::spatial::{Twist, Wrench};
+use crate::model::{JointId, Model};
+use crate::state::Data;
+
+/// A failure to evaluate the equations of motion, with the evidence.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DynamicsError {
+    /// A kinematics query failed (wrong vector length, unknown id).
+    #[error(transparent)]
+    Kinematics(#[from] KinematicsError),
+    /// A number is NaN or infinite.
+    #[error("at t = {t}: {what}[{index}] is not finite ({value})")]
+    NonFinite {
+        /// Time (s).
+        t: Real,
+        /// Which vector: `"q"`, `"u"`, `"tau"` or `"udot"`.
+        what: &'static str,
+        /// Index of the first bad entry.
+        index: usize,
+        /// Its value.
+        value: Real,
+    },
+    /// The mass matrix is not positive definite (the Cholesky pivot is not positive).
+    #[error(
+        "at t = {t}: the mass matrix is not positive definite (Cholesky pivot {pivot} = {value})"
+    )]
+    NotPositiveDefinite {
+        /// Time (s).
+        t: Real,
+        /// Index of the failing pivot (a generalized coordinate).
+        pivot: usize,
+        /// The value under the square root.
+        value: Real,
+    },
+    /// [`solve_mass`] was called before a successful factorization.
+    #[error("the mass matrix has not been factored (call forward_dynamics first)")]
+    NotFactored,
+}
+
+/// The Cholesky factorization `M = L Lᵀ` (`L` lower triangular) of the mass matrix, kept in
+/// a preallocated buffer so that refactoring allocates nothing. The impact map solves
+/// `M x = b` with it for several right-hand sides (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
+#[derive(Clone, Debug)]
+pub struct MassFactor {
+    /// `L`, lower triangle (the strict upper triangle is not used).
+    l: DMatrix<Real>,
+    /// `1 / L_jj`: multiplying by it keeps divisions out of the inner loops.
+    inv_diag: Vec<Real>,
+    /// `true` after a successful factorization.
+    valid: bool,
+}
+
+impl MassFactor {
+    /// A factor buffer for an `n × n` matrix, not yet valid.
+    pub fn new(n: usize) -> Self {
+        MassFactor {
+            l: DMatrix::zeros(n, n),
+            inv_diag: vec![0.0; n],
+            valid: false,
+        }
+    }
+
+    /// `true` if it holds the factor of the last mass matrix.
+    pub fn is_valid(&self) -> bool {
+        self.valid
+    }
+
+    /// The lower triangular factor `L` of `M = L Lᵀ` (its strict upper triangle holds
+    /// nothing meaningful).
+    pub fn lower(&self) -> &DMatrix<Real> {
+        &self.l
+    }
+
+    /// Factors the symmetric matrix `m` (its lower triangle is read) in place into
+    /// `M = L Lᵀ`, column by column with column updates (left-looking, "jki"):
+    ///
+    /// ```text
+    /// c = M[j.., j] − Σ_{k<j} L_jk L[j.., k]      (one axpy per k, contiguous columns)
+    /// L_jj = √c_j,   L[j+1.., j] = c[j+1..] / L_jj
+    /// ```
+    ///
+    /// Returns the failing pivot and its value if a pivot is not positive (or not finite).
+    fn factor(&mut self, m: &DMatrix<Real>) -> Result<(), (usize, Real)> {
+        self.valid = false;
+        let n = m.nrows();
+        let src = m.as_slice();
+        let l = self.l.as_mut_slice();
+        for j in 0..n {
+            // Columns 0..j of L (done) and column j (being computed), contiguous.
+            let (done, rest) = l.split_at_mut(j * n);
+            let col_j = &mut rest[j..n];
+            col_j.copy_from_slice(&src[j * n + j..j * n + n]);
+            for k in 0..j {
+                let col_k = &done[k * n + j..k * n + n];
+                let ljk = col_k[0];
+                for (c, x) in col_j.iter_mut().zip(col_k) {
+                    *c -= ljk * x;
+                }
+            }
+            let d = col_j[0];
+            if !(d > 0.0 && d.is_finite()) {
+                return Err((j, d));
+            }
+            let ljj = d.sqrt();
+            let inv = 1.0 / ljj;
+            col_j[0] = ljj;
+            for c in &mut col_j[1..] {
+                *c *= inv;
+            }
+            self.inv_diag[j] = inv;
+        }
+        self.valid = true;
+        Ok(())
+    }
+
+    /// Solves `M x = b` in place (`b` becomes `x`): `L y = b` forward, then `Lᵀ x = y`
+    /// backward.
+    pub fn solve_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
+        if !self.valid {
+            return Err(DynamicsError::NotFactored);
+        }
+        let n = self.l.nrows();
+        check_len("right-hand side", n, b.len())?;
+        let l = self.l.as_slice();
+        // L y = b, column by column: y_j = b_j / L_jj, then b[j+1..] −= L[j+1.., j] y_j.
+        for j in 0..n {
+            b[j] *= self.inv_diag[j];
+            let yj = b[j];
+            for (bk, lkj) in b[j + 1..].iter_mut().zip(&l[j * n + j + 1..j * n + n]) {
+                *bk -= lkj * yj;
+            }
+        }
+        // Lᵀ x = y from the last: x_j = (y_j − Σ_{k>j} L_kj x_k) / L_jj.
+        for j in (0..n).rev() {
+            let below: Real = l[j * n + j + 1..j * n + n]
+                .iter()
+                .zip(&b[j + 1..])
+                .map(|(lkj, xk)| lkj * xk)
+                .sum();
+            b[j] = (b[j] - below) * self.inv_diag[j];
+        }
+        Ok(())
+    }
+}
+
+/// Kinetic and potential energy.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Energy {
+    /// Kinetic energy `T` (J), [P, Eq. (70)], including prescribed motions.
+    pub kinetic: Real,
+    /// Potential energy `V` (J): gravity and joint springs.
+    pub potential: Real,
+}
+
+impl Energy {
+    /// `T + V` (J).
+    pub fn total(&self) -> Real {
+        self.kinetic + self.potential
+    }
+}
+
+/// The powers that change the mechanical energy `E = T + V` in free flight:
+/// `dE/dt = damping + applied + drives + uᵀ τ`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Power {
+    /// Power of the joint dampers `−Σ c q̇²` (W), never positive.
+    pub damping: Real,
+    /// Power of the constant joint efforts `Σ τ q̇` (W).
+    pub applied: Real,
+    /// Power delivered by the prescribed drives `Σ Q_p q̇_p` (W).
+    pub drives: Real,
+}
+
+/// Computes the mass matrix by the composite rigid body algorithm [F, §6.2].
+///
+/// Implements [P, Eq. (68)] with the sign of `paper/ERRATA.md`: for rigid bodies with
+/// partial twists `S_r(b)`, `M_rs = Σ_b S_r(b)ᵀ I_b S_s(b)` (`= Σ m v_r^C·v_s^C + I_c ω_r ω_s`).
+/// In a tree, `S_r(b)` is `S_r` carried down to `b`, so with the composite inertias
+///
+/// ```text
+/// I^c_b = I_b + Σ_{children c} P_cᵀ I^c_c P_c        (P_c = 1, or the projection of an absolute joint)
+/// M_rs  = S_sᵀ (P…ᵀ I^c_b S_r)                        (s on the path from b to the root)
+/// ```
+///
+/// `P_cᵀ I^c P_c` is the point mass `I^c.m` at the joint (see
+/// [`crate::model::spatial::Inertia::projected_at`]). Cost: `O(n·depth)`.
+///
+/// Requires [`update_positions`]. Writes `data.composite` and `data.mass`.
+pub fn mass_matrix(model: &Model, data: &mut Data) {
+    let joints = model.joints();
+    // Composite inertias, leaves first.
+    data.composite.copy_from_slice(&data.body_inertia);
+    for i in (0..joints.len()).rev() {
+        if let Some(p) = joints[i].parent {
+            let mut ic = data.composite[i];
+            if joints[i].is_absolute() {
+                ic = ic.projected_at(data.joint_frame[i].translation);
+            }
+            data.composite[p.index()] += ic;
+        }
+    }
+    // Rows: for each free coordinate, the wrench I^c S walked up to the root. M is
+    // symmetric; both triangles are written (column-major slice, M_rc at c·nu + r).
+    let nu = model.nu();
+    let (subspace, frames, composite) = (&data.subspace, &data.joint_frame, &data.composite);
+    let mass = data.mass.as_mut_slice();
+    mass.fill(0.0);
+    for (i, joint) in joints.iter().enumerate() {
+        let Some(si) = model.q_index(JointId(i)) else {
+            continue;
+        };
+        for k in 0..joint.kind.ndof() {
+            let r = si + k;
+            let mut f = composite[i].mul_twist(&subspace[i][k]);
+            for k2 in 0..=k {
+                let m = subspace[i][k2].dot(&f);
+                mass[(si + k2) * nu + r] = m;
+                mass[r * nu + si + k2] = m;
+            }
+            let mut b = i;
+            while let Some(p) = joints[b].parent {
+                if joints[b].is_absolute() {
+                    f = f.projected_at(frames[b].translation);
+                }
+                b = p.index();
+                if let Some(sp) = model.q_index(JointId(b)) {
+                    for k2 in 0..joints[b].kind.ndof() {
+                        let m = subspace[b][k2].dot(&f);
+                        mass[(sp + k2) * nu + r] = m;
+                        mass[r * nu + sp + k2] = m;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Which generalized accelerations the Newton–Euler pass uses for the free coordinates.
+#[derive(Clone, Copy)]
+enum FreeAccel<'a> {
+    /// `u̇ = 0`: the pass yields the bias forces.
+    Zero,
+    /// `u̇` given by the caller.
+    Given(&'a [Real]),
+    /// `u̇ = data.udot`, the last forward dynamics.
+    Solved,
+}
+
+/// The recursive Newton–Euler pass [F, §5.3] over all joints, free and prescribed:
+///
+/// ```text
+/// A_b = P_b A_parent + c_b + Σ S_k q̈_k
+/// F_b = I_b A_b + V_b ×* (I_b V_b) − (c_b × m_b g, m_b g) + Σ_{children} P_cᵀ F_c
+/// effort_k = S_kᵀ F_b
+/// ```
+///
+/// with `q̈` from `accel` for the free coordinates and `q̈_p(t)` for the prescribed ones.
+/// Writes `data.body_accel`, `data.body_wrench`, `data.joint_effort`.
+fn newton_euler(model: &Model, data: &mut Data, accel: FreeAccel<'_>) {
+    let joints = model.joints();
+    let g = model.gravity();
+    // Forward: accelerations and the net wrench each body needs.
+    for (i, joint) in joints.iter().enumerate() {
+        let mut a = match joint.parent {
+            Some(p) => data.body_accel[p.index()],
+            None => Twist::ZERO,
+        };
+        if joint.is_absolute() {
+            a = a.projected_at(data.joint_frame[i].translation);
+        }
+        a += data.body_accel_vp[i];
+        let qdd = data.joint_qdd_prescribed[i];
+        let free = model.q_index(JointId(i));
+        for k in 0..joint.kind.ndof() {
+            let acc = match (free, accel) {
+                (None, _) | (_, FreeAccel::Zero) => qdd[k],
+                (Some(s), FreeAccel::Given(udot)) => udot[s + k],
+                (Some(s), FreeAccel::Solved) => data.udot[s + k],
+            };
+            a += data.subspace[i][k] * acc;
+        }
+        let inertia = &data.body_inertia[i];
+        let v = &data.body_twist[i];
+        let weight = Wrench::force_at(g * inertia.m, data.body_com[i]);
+        data.body_accel[i] = a;
+        data.body_wrench[i] = inertia.mul_twist(&a) + v.cross_force(&inertia.mul_twist(v)) - weight;
+    }
+    // Backward: joint efforts, and the wrench passed on to the parent.
+    for i in (0..joints.len()).rev() {
+        let f = data.body_wrench[i];
+        for k in 0..joints[i].kind.ndof() {
+            data.joint_effort[i][k] = data.subspace[i][k].dot(&f);
+        }
+        if let Some(p) = joints[i].parent {
+            let f = if joints[i].is_absolute() {
+                f.projected_at(data.joint_frame[i].translation)
+            } else {
+                f
+            };
+            data.body_wrench[p.index()] += f;
+        }
+    }
+}
+
+/// Writes the generalized forces of the free coordinates, `out = effort − Q_force` with
+/// `Q_force = −k (q − q_rest) − c q̇ + τ` the joint force elements.
+fn gather_free(model: &Model, data: &Data, out: &mut [Real]) {
+    for (i, joint) in model.joints().iter().enumerate() {
+        if let Some(s) = model.q_index(JointId(i)) {
+            let nd = joint.kind.ndof();
+            out[s..s + nd].copy_from_slice(&data.joint_effort[i][..nd]);
+            if joint.kind.ndof() == 1 {
+                out[s] -= joint
+                    .force
+                    .generalized_force(data.joint_q[i][0], data.joint_qd[i][0]);
+            }
+        }
+    }
+}
+
+/// Computes the bias forces `h(t, q, u)`: the generalized forces that would be needed for
+/// `u̇ = 0`, by the Newton–Euler pass with the free accelerations set to zero:
+///
+/// ```text
+/// h = C(q, u) u + g(q) + M_fp q̈_p(t) − Q_force(q, u)
+/// ```
+///
+/// (velocity products, gravity, coupling to the prescribed accelerations, and the joint
+/// springs, dampers and efforts `Q_force = −k (q − q_rest) − c q̇ + τ`).
+///
+/// Requires [`update_velocities`]. Writes `data.bias` (and the Newton–Euler scratch).
+pub fn bias_forces(model: &Model, data: &mut Data) {
+    newton_euler(model, data, FreeAccel::Zero);
+    let mut bias = std::mem::take(&mut data.bias);
+    gather_free(model, data, bias.as_mut_slice());
+    data.bias = bias;
+}
+
+/// Computes the generalized forces that produce the accelerations `udot`:
+/// `τ = M u̇ + h` (inverse dynamics, by the Newton–Euler pass).
+///
+/// Requires [`update_velocities`]. Writes `data.tau` (and the Newton–Euler scratch,
+/// including the prescribed joints' efforts in `data.joint_effort`).
+pub fn inverse_dynamics(
+    model: &Model,
+    data: &mut Data,
+    udot: &[Real],
+) -> Result<(), DynamicsError> {
+    check_len("udot", model.nu(), udot.len())?;
+    newton_euler(model, data, FreeAccel::Given(udot));
+    let mut tau = std::mem::take(&mut data.tau);
+    gather_free(model, data, tau.as_mut_slice());
+    data.tau = tau;
+    Ok(())
+}
+
+/// Solves the equations of motion `M u̇ = −h` (no external generalized force): see
+/// [`forward_dynamics_with`].
+pub fn forward_dynamics(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    q: &[Real],
+    u: &[Real],
+) -> Result<(), DynamicsError> {
+    forward_dynamics_with(model, data, t, q, u, None)
+}
+
+/// Solves the equations of motion for the generalized accelerations,
+///
+/// ```text
+/// u̇ = M(q)⁻¹ (τ − h(t, q, u))
+/// ```
+///
+/// through the Cholesky factorization `M = L Lᵀ` ([P, Eq. (1)] with `M = −M_paper`).
+/// Stages: check the input, kinematics, [`mass_matrix`], [`bias_forces`], factor, solve.
+/// `tau` is an optional generalized force `[nu]` (N, N·m), zero if `None`. Allocates nothing.
+///
+/// Writes every kinematics field, `data.mass`, `data.mass_factor`, `data.bias` and
+/// `data.udot`. The factor stays valid for [`solve_mass`] until the next call.
+pub fn forward_dynamics_with(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    q: &[Real],
+    u: &[Real],
+    tau: Option<&[Real]>,
+) -> Result<(), DynamicsError> {
+    // Input: sizes and finite numbers.
+    check_len("q", model.nq(), q.len())?;
+    check_len("u", model.nu(), u.len())?;
+    check_finite(t, "q", q)?;
+    check_finite(t, "u", u)?;
+    if let Some(tau) = tau {
+        check_len("tau", model.nu(), tau.len())?;
+        check_finite(t, "tau", tau)?;
+    }
+    // Kinematics, M(q), h(t, q, u).
+    update_positions(model, data, t, q)?;
+    update_velocities(model, data, u)?;
+    mass_matrix(model, data);
+    bias_forces(model, data);
+    // M = L Lᵀ.
+    data.mass_factor
+        .factor(&data.mass)
+        .map_err(|(pivot, value)| DynamicsError::NotPositiveDefinite { t, pivot, value })?;
+    // u̇ = M⁻¹ (τ − h).
+    for r in 0..model.nu() {
+        data.udot[r] = tau.map_or(0.0, |tau| tau[r]) - data.bias[r];
+    }
+    data.mass_factor.solve_in_place(data.udot.as_mut_slice())?;
+    check_finite(t, "udot", data.udot.as_slice())
+}
+
+/// The right-hand side of the first-order system `ẏ = f(t, y)` with `y = [q; u]`:
+/// `dy = [u; M⁻¹(−h)]`. Allocates nothing; see [`forward_dynamics`].
+pub fn ode_rhs(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    y: &[Real],
+    dy: &mut [Real],
+) -> Result<(), DynamicsError> {
+    let n = model.nq();
+    check_len("y", 2 * n, y.len())?;
+    check_len("dy", 2 * n, dy.len())?;
+    let (q, u) = y.split_at(n);
+    forward_dynamics(model, data, t, q, u)?;
+    dy[..n].copy_from_slice(u);
+    dy[n..].copy_from_slice(data.udot.as_slice());
+    Ok(())
+}
+
+/// Solves `M x = b` in place with the factor of the last [`forward_dynamics`] (`b`
+/// becomes `x`). For the impact map: `Δu = M⁻¹ Jᵀ I` [P, Eq. (16)], `W = J M⁻¹ Jᵀ`
+/// [P, Eq. (20)].
+pub fn solve_mass(data: &Data, b: &mut [Real]) -> Result<(), DynamicsError> {
+    data.mass_factor.solve_in_place(b)
+}
+
+/// Factors the mass matrix already in `data.mass` (after [`mass_matrix`]) without solving
+/// the dynamics, e.g. to compute an impact at a state. `t` is reported in errors.
+pub fn factor_mass_matrix(data: &mut Data, t: Real) -> Result<(), DynamicsError> {
+    data.mass_factor
+        .factor(&data.mass)
+        .map_err(|(pivot, value)| DynamicsError::NotPositiveDefinite { t, pivot, value })
+}
+
+/// The kinetic energy, [P, Eq. (70)], with the full velocities (prescribed motions
+/// included):
+///
+/// ```text
+/// T = Σ_b ½ V_bᵀ I_b V_b = Σ_b ½ m_b |v_c|² + ½ I_c ω_b²
+/// ```
+///
+/// Without prescribed motion `T = ½ uᵀ M u`. Requires [`update_velocities`].
+pub fn kinetic_energy(model: &Model, data: &Data) -> Real {
+    (0..model.nbody())
+        .map(|i| data.body_inertia[i].kinetic_energy(&data.body_twist[i]))
+        .sum()
+}
+
+/// The potential energy of gravity and of the joint springs:
+///
+/// ```text
+/// V = −Σ_b m_b g·c_b + Σ_joints ½ k (q − q_rest)²
+/// ```
+///
+/// Requires [`update_positions`].
+pub fn potential_energy(model: &Model, data: &Data) -> Real {
+    let g = model.gravity();
+    let gravity: Real = (0..model.nbody())
+        .map(|i| -data.body_inertia[i].m * g.dot(data.body_com[i]))
+        .sum();
+    let springs: Real = model
+        .joints()
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.drive.is_none() && j.kind.ndof() == 1)
+        .map(|(i, j)| j.force.potential_energy(data.joint_q[i][0]))
+        .sum();
+    gravity + springs
+}
+
+/// Kinetic and potential energy at the state `(t, q, u)` (runs the kinematics).
+pub fn energy(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    q: &[Real],
+    u: &[Real],
+) -> Result<Energy, KinematicsError> {
+    update_positions(model, data, t, q)?;
+    update_velocities(model, data, u)?;
+    Ok(Energy {
+        kinetic: kinetic_energy(model, data),
+        potential: potential_energy(model, data),
+    })
+}
+
+/// The powers of the dampers, of the constant efforts and of the prescribed drives, for the
+/// energy audit: in free flight `dE/dt = damping + applied + drives (+ uᵀ τ)`.
+///
+/// The drive efforts are `Q_p = S_pᵀ F` of the Newton–Euler pass with the solved `u̇`
+/// (the prescribed rows of `M q̈ + h = Q`), and their power is `Σ Q_p q̇_p`.
+///
+/// Requires [`forward_dynamics`] at the same state (it uses `data.udot`). Writes the
+/// Newton–Euler scratch, leaving the drive efforts in `data.joint_effort`.
+pub fn power(model: &Model, data: &mut Data) -> Power {
+    let mut p = Power::default();
+    for (i, joint) in model.joints().iter().enumerate() {
+        if joint.drive.is_none() && joint.kind.ndof() == 1 {
+            let qd = data.joint_qd[i][0];
+            p.damping -= joint.force.damping * qd * qd;
+            p.applied += joint.force.effort * qd;
+        }
+    }
+    if model.has_prescribed_motion() {
+        newton_euler(model, data, FreeAccel::Solved);
+        for (i, joint) in model.joints().iter().enumerate() {
+            if joint.drive.is_some() {
+                p.drives += data.joint_effort[i][0] * data.joint_qd[i][0];
+            }
+        }
+    }
+    p
+}
+
+fn check_finite(t: Real, what: &'static str, v: &[Real]) -> Result<(), DynamicsError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(DynamicsError::NonFinite {
+            t,
+            what,
+            index,
+            value: v[index],
+        }),
+    }
+}

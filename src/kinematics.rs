@@ -1,1 +1,419 @@
-//! Placeholder: filled in by its own issue.
+//! Forward kinematics of the tree: body poses at `(t, q)`, body twists at `(t, q, u)`, and
+//! the position, velocity and Jacobian of any body point, so that a point's velocity is
+//!
+//! ```text
+//! v^P = J_P(t, q) u + v_t^P(t, q)          [P, Eq. (2)]
+//! ```
+//!
+//! with `J_P` the 2×nu matrix of its partial velocities `v_r^P` and `v_t^P` its remainder
+//! velocity (non-zero only below a prescribed joint).
+//!
+//! ## Propagation
+//!
+//! Twists are in world coordinates referred to the world origin `O`
+//! ([`crate::model::spatial`]). With `S` a joint's motion subspace columns and `P` the
+//! identity, or the projection [`Twist::projected_at`] at the joint's position `a` for an
+//! absolute revolute joint, the twist and spatial acceleration of body `b` are
+//!
+//! ```text
+//! V_b = P_b V_parent + Σ_k S_k q̇_k
+//! A_b = P_b A_parent + c_b + Σ_k S_k q̈_k,     c_b = Ṗ_b V_parent + Σ_k Ṡ_k q̇_k
+//! ```
+//!
+//! where, with `ȧ = V_parent(a)` the velocity of the joint's position:
+//!
+//! | joint | `S` | `Ṡ` |
+//! |---|---|---|
+//! | revolute at `a` | `(1, −perp(a))` | `(0, −perp(ȧ))` |
+//! | prismatic, axis `d` | `(0, d)` | `V_parent ×ₘ S = (0, ω_parent perp(d))` |
+//! | translation, axes `e₁, e₂` | `(0, e₁)`, `(0, e₂)` | `(0, ω_parent perp(eᵢ))` |
+//! | planar, body origin `o` | `(0, e₁)`, `(0, e₂)`, `(1, −perp(o))` | as above, `(0, −perp(ȯ))` |
+//!
+//! and `Ṗ_b V_parent = (0, ω_parent perp(ȧ))` for an absolute joint.
+//!
+//! ## Absolute angles
+//!
+//! An absolute revolute joint (the paper's double pendulum, [P, Sect. 5]) is handled
+//! natively: its body is carried by the parent's motion through `P(a)` — translated with
+//! the velocity of `a`, not turned. The same projection appears wherever the tree is
+//! walked: in Jacobians (the point at which ancestors' partial velocities are evaluated
+//! moves to `a`), and in [`crate::dynamics`] (the subtree presents itself to its ancestors
+//! as a point mass at `a`). This is equivalent to the constant change of coordinates
+//! `q_rel = T q` to relative angles, without forming `T`.
+
+use nalgebra::Matrix2xX;
+
+use crate::math::{Pose, Real, Vec2, perp};
+use crate::model::spatial::{Inertia, Twist};
+use crate::model::{BodyId, ColliderId, JointId, JointKind, Model};
+use crate::state::Data;
+
+/// A kinematics query that cannot be answered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum KinematicsError {
+    /// A vector of the wrong length.
+    #[error("{what} has length {got}, expected {expected}")]
+    DimensionMismatch {
+        /// Which vector (`"q"`, `"u"`, `"tau"`, `"jacobian columns"`, …).
+        what: &'static str,
+        /// The expected length.
+        expected: usize,
+        /// The length given.
+        got: usize,
+    },
+    /// A body id that is not in the model.
+    #[error("body #{body} is not in the model ({nbody} bodies)")]
+    UnknownBody {
+        /// The index given.
+        body: usize,
+        /// The number of bodies.
+        nbody: usize,
+    },
+    /// A collider id that is not in the model.
+    #[error("collider #{collider} is not in the model")]
+    UnknownCollider {
+        /// The index given.
+        collider: usize,
+    },
+}
+
+/// The velocity of a body point, split as in [P, Eq. (2)].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointVelocity {
+    /// The velocity `v^P = J_P u + v_t^P` (m/s, world frame).
+    pub total: Vec2,
+    /// The remainder velocity `v_t^P`, due to prescribed motions alone (m/s, world frame).
+    pub remainder: Vec2,
+}
+
+pub(crate) fn check_len(
+    what: &'static str,
+    expected: usize,
+    got: usize,
+) -> Result<(), KinematicsError> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(KinematicsError::DimensionMismatch {
+            what,
+            expected,
+            got,
+        })
+    }
+}
+
+fn check_body(model: &Model, body: BodyId) -> Result<usize, KinematicsError> {
+    if body.index() < model.nbody() {
+        Ok(body.index())
+    } else {
+        Err(KinematicsError::UnknownBody {
+            body: body.index(),
+            nbody: model.nbody(),
+        })
+    }
+}
+
+/// Computes the joint coordinates (prescribed ones at time `t`), joint frames, motion
+/// subspaces, body poses, centres of mass and spatial inertias at `(t, q)`.
+///
+/// `X_b = X_parent · placement · motion(q)` (see [`JointKind`]); for an absolute revolute
+/// joint the joint frame is `(X_parent · a_placement, R_placement)`.
+///
+/// Writes `data.time`, `joint_q`, `joint_qdd_prescribed`, `joint_frame`, `subspace`,
+/// `body_pose`, `body_com`, `body_inertia`.
+pub fn update_positions(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    q: &[Real],
+) -> Result<(), KinematicsError> {
+    check_len("q", model.nq(), q.len())?;
+    data.time = t;
+    for (i, joint) in model.joints().iter().enumerate() {
+        // Joint coordinates: from the drive, from q, or none.
+        let nd = joint.kind.ndof();
+        let mut jq = [0.0; 3];
+        let mut jqdd = [0.0; 3];
+        match (&joint.drive, model.q_index(JointId(i))) {
+            (Some(drive), _) => {
+                jq[0] = drive.position(t);
+                jqdd[0] = drive.acceleration(t);
+            }
+            (None, Some(s)) => jq[..nd].copy_from_slice(&q[s..s + nd]),
+            (None, None) => {}
+        }
+        // Joint frame in the world.
+        let parent = joint
+            .parent
+            .map_or(Pose::IDENTITY, |p| data.body_pose[p.index()]);
+        let frame = if joint.is_absolute() {
+            Pose::from_parts(
+                parent.transform_point(joint.placement.translation),
+                joint.placement.rotation,
+            )
+        } else {
+            parent * joint.placement
+        };
+        // Body pose and motion subspace.
+        let (pose, s) = joint_motion(&joint.kind, &frame, &jq);
+        let body = &model.bodies()[i];
+        let com = pose.transform_point(body.com);
+        data.joint_q[i] = jq;
+        data.joint_qdd_prescribed[i] = jqdd;
+        data.joint_frame[i] = frame;
+        data.subspace[i] = s;
+        data.body_pose[i] = pose;
+        data.body_com[i] = com;
+        data.body_inertia[i] = Inertia::from_body(body.mass, com, body.inertia);
+    }
+    Ok(())
+}
+
+/// The body pose `frame · motion(q)` and the motion subspace columns (world, referred to
+/// `O`) of a joint with world frame `frame` at joint coordinates `q`.
+fn joint_motion(kind: &JointKind, frame: &Pose, q: &[Real; 3]) -> (Pose, [Twist; 3]) {
+    let e1 = frame.transform_vector(Vec2::X);
+    let e2 = frame.transform_vector(Vec2::Y);
+    match *kind {
+        JointKind::Revolute { .. } => (
+            *frame * Pose::rotation(q[0]),
+            [
+                Twist::rotation_about(frame.translation),
+                Twist::ZERO,
+                Twist::ZERO,
+            ],
+        ),
+        JointKind::Prismatic { axis } => (
+            *frame * Pose::from_translation(axis * q[0]),
+            [
+                Twist::translation_along(frame.transform_vector(axis)),
+                Twist::ZERO,
+                Twist::ZERO,
+            ],
+        ),
+        JointKind::Translation => (
+            *frame * Pose::translation(q[0], q[1]),
+            [
+                Twist::translation_along(e1),
+                Twist::translation_along(e2),
+                Twist::ZERO,
+            ],
+        ),
+        JointKind::Planar => {
+            let pose = *frame * Pose::new(Vec2::new(q[0], q[1]), q[2]);
+            (
+                pose,
+                [
+                    Twist::translation_along(e1),
+                    Twist::translation_along(e2),
+                    Twist::rotation_about(pose.translation),
+                ],
+            )
+        }
+        JointKind::Fixed => (*frame, [Twist::ZERO; 3]),
+    }
+}
+
+/// Computes the joint rates (prescribed ones at `data.time`), the body twists, their
+/// remainder parts and the velocity-product accelerations `c_b` at `u` (see the
+/// [module documentation](self) for the recursion).
+///
+/// Requires [`update_positions`] at the same state. Writes `data.joint_qd`, `body_twist`,
+/// `body_twist_remainder`, `body_accel_vp`.
+pub fn update_velocities(
+    model: &Model,
+    data: &mut Data,
+    u: &[Real],
+) -> Result<(), KinematicsError> {
+    check_len("u", model.nu(), u.len())?;
+    let t = data.time;
+    for (i, joint) in model.joints().iter().enumerate() {
+        // Joint rates.
+        let nd = joint.kind.ndof();
+        let mut qd = [0.0; 3];
+        let prescribed = joint.drive.is_some();
+        match (&joint.drive, model.q_index(JointId(i))) {
+            (Some(drive), _) => qd[0] = drive.velocity(t),
+            (None, Some(s)) => qd[..nd].copy_from_slice(&u[s..s + nd]),
+            (None, None) => {}
+        }
+        // What the parent carries: all of its twist, or only the velocity of `a`.
+        let (vp, vp_rem) = match joint.parent {
+            Some(p) => (
+                data.body_twist[p.index()],
+                data.body_twist_remainder[p.index()],
+            ),
+            None => (Twist::ZERO, Twist::ZERO),
+        };
+        let a = data.joint_frame[i].translation;
+        let a_dot = vp.velocity_at(a);
+        let (mut v, mut v_rem, mut c) = if joint.is_absolute() {
+            // Ṗ V_parent = (0, ω_parent perp(ȧ)).
+            (
+                vp.projected_at(a),
+                vp_rem.projected_at(a),
+                Twist::new(0.0, perp(a_dot) * vp.w),
+            )
+        } else {
+            (vp, vp_rem, Twist::ZERO)
+        };
+        // Joint motion: V += S q̇.
+        let s = &data.subspace[i];
+        for k in 0..nd {
+            v += s[k] * qd[k];
+            if prescribed {
+                v_rem += s[k] * qd[k];
+            }
+        }
+        // c += Ṡ q̇.
+        match joint.kind {
+            JointKind::Revolute { .. } => c += Twist::new(0.0, -perp(a_dot)) * qd[0],
+            JointKind::Prismatic { .. } | JointKind::Translation => {
+                for k in 0..nd {
+                    c += vp.cross_motion(&s[k]) * qd[k];
+                }
+            }
+            JointKind::Planar => {
+                let o = data.body_pose[i].translation;
+                c += vp.cross_motion(&s[0]) * qd[0];
+                c += vp.cross_motion(&s[1]) * qd[1];
+                c += Twist::new(0.0, -perp(v.velocity_at(o))) * qd[2];
+            }
+            JointKind::Fixed => {}
+        }
+        data.joint_qd[i] = qd;
+        data.body_twist[i] = v;
+        data.body_twist_remainder[i] = v_rem;
+        data.body_accel_vp[i] = c;
+    }
+    Ok(())
+}
+
+/// [`update_positions`] then [`update_velocities`].
+pub fn forward_kinematics(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    q: &[Real],
+    u: &[Real],
+) -> Result<(), KinematicsError> {
+    update_positions(model, data, t, q)?;
+    update_velocities(model, data, u)
+}
+
+/// The world position (m) of the point `p` given in the frame of `body`: `X_b p`.
+/// Requires [`update_positions`].
+pub fn point_world(
+    model: &Model,
+    data: &Data,
+    body: BodyId,
+    p: Vec2,
+) -> Result<Vec2, KinematicsError> {
+    let b = check_body(model, body)?;
+    Ok(data.body_pose[b].transform_point(p))
+}
+
+/// The world pose of a collider's shape: `X_b · pose` on a body, `pose` in the world.
+/// Requires [`update_positions`].
+pub fn collider_pose(
+    model: &Model,
+    data: &Data,
+    collider: ColliderId,
+) -> Result<Pose, KinematicsError> {
+    let c = model
+        .collider(collider)
+        .ok_or(KinematicsError::UnknownCollider {
+            collider: collider.index(),
+        })?;
+    Ok(match c.body {
+        Some(b) => data.body_pose[check_body(model, b)?] * c.pose,
+        None => c.pose,
+    })
+}
+
+/// The velocity of the point of `body` that is at the world position `p`, and its
+/// remainder part [P, Eq. (2)]: `v = V_b(p) = v_O + ω perp(p)`, `v_t = V_b^rem(p)`.
+/// Requires [`update_velocities`].
+pub fn point_velocity(
+    model: &Model,
+    data: &Data,
+    body: BodyId,
+    p: Vec2,
+) -> Result<PointVelocity, KinematicsError> {
+    let b = check_body(model, body)?;
+    Ok(PointVelocity {
+        total: data.body_twist[b].velocity_at(p),
+        remainder: data.body_twist_remainder[b].velocity_at(p),
+    })
+}
+
+/// The translational Jacobian `J_P` (2×nu) of the point of `body` at the world position `p`:
+/// column `r` is the partial velocity `v_r^P` [P, Eq. (2)], so that `v^P = J_P u + v_t^P`.
+///
+/// Walking from `body` to the root, each free coordinate `k` of a joint on the path gives
+/// the column `S_k(r) = S_k.v + S_k.ω perp(r)`, where `r` starts at `p` and moves to the
+/// joint position `a` whenever an absolute revolute joint is crossed (the ancestors only
+/// translate what lies behind it). The other columns are zero.
+///
+/// Requires [`update_positions`]. `jac` must have `nu` columns. For a point given in the
+/// body's frame, get its world position with [`point_world`] first.
+pub fn point_jacobian(
+    model: &Model,
+    data: &Data,
+    body: BodyId,
+    p: Vec2,
+    jac: &mut Matrix2xX<Real>,
+) -> Result<(), KinematicsError> {
+    check_len("jacobian columns", model.nu(), jac.ncols())?;
+    let mut b = check_body(model, body)?;
+    jac.fill(0.0);
+    let mut r = p;
+    loop {
+        let joint = &model.joints()[b];
+        if let Some(s) = model.q_index(JointId(b)) {
+            for k in 0..joint.kind.ndof() {
+                let col = data.subspace[b][k].velocity_at(r);
+                jac[(0, s + k)] = col.x;
+                jac[(1, s + k)] = col.y;
+            }
+        }
+        if joint.is_absolute() {
+            r = data.joint_frame[b].translation;
+        }
+        match joint.parent {
+            Some(parent) => b = parent.index(),
+            None => return Ok(()),
+        }
+    }
+}
+
+/// The angular Jacobian (1×nu) of `body`: `ω_b = Σ_r row[r] u_r + ω_t`. Each free
+/// rotational coordinate on the path to the root contributes 1, up to and including the
+/// first absolute revolute joint (above it the ancestors no longer turn the body).
+///
+/// Requires [`update_positions`]. `row` must have `nu` entries.
+pub fn angular_jacobian(
+    model: &Model,
+    data: &Data,
+    body: BodyId,
+    row: &mut [Real],
+) -> Result<(), KinematicsError> {
+    check_len("angular jacobian", model.nu(), row.len())?;
+    let mut b = check_body(model, body)?;
+    row.fill(0.0);
+    loop {
+        let joint = &model.joints()[b];
+        if let Some(s) = model.q_index(JointId(b)) {
+            for k in 0..joint.kind.ndof() {
+                row[s + k] = data.subspace[b][k].w;
+            }
+        }
+        if joint.is_absolute() {
+            return Ok(());
+        }
+        match joint.parent {
+            Some(parent) => b = parent.index(),
+            None => return Ok(()),
+        }
+    }
+}

@@ -1,1 +1,146 @@
-//! Placeholder: filled in by its own issue.
+//! [`State`], what the integrator advances, and [`Data`], the scratch workspace of the
+//! kinematics and dynamics kernels.
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::MassFactor;
+use crate::math::{Pose, Real, Vec2};
+use crate::model::Model;
+use crate::model::spatial::{Inertia, Twist, Wrench};
+
+/// The state of a run: all that is needed to restart it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    /// Time `t` (s).
+    pub t: Real,
+    /// Generalized coordinates `q` `[nq]` (m, rad), in the order of
+    /// [`Model::coordinates`].
+    pub q: DVector<Real>,
+    /// Generalized speeds `u = q̇` `[nu]` (m/s, rad/s).
+    pub u: DVector<Real>,
+}
+
+impl State {
+    /// The state at time `t` with coordinates `q` and speeds `u`.
+    pub fn new(t: Real, q: DVector<Real>, u: DVector<Real>) -> Self {
+        State { t, q, u }
+    }
+
+    /// The state of `model` at `t = 0` with every coordinate and speed zero.
+    pub fn zeros(model: &Model) -> Self {
+        State {
+            t: 0.0,
+            q: DVector::zeros(model.nq()),
+            u: DVector::zeros(model.nu()),
+        }
+    }
+}
+
+/// Scratch space of the kernels of [`crate::kinematics`] and [`crate::dynamics`], sized
+/// once from a [`Model`] so that evaluating the equations of motion allocates nothing.
+/// Never serialized; rebuild it with [`Data::new`].
+///
+/// Per-joint arrays are indexed by joint (= body) index and hold up to three joint
+/// coordinates (only the first `ndof` are meaningful). Spatial quantities are in world
+/// coordinates referred to the world origin (see [`crate::model::spatial`]). Each field
+/// says which kernel writes it.
+#[derive(Clone, Debug)]
+pub struct Data {
+    /// Time of the last [`crate::kinematics::update_positions`] (s).
+    pub time: Real,
+    /// Joint coordinates, free and prescribed `[nbody][3]` (m, rad).
+    /// Written by `update_positions`.
+    pub joint_q: Vec<[Real; 3]>,
+    /// Joint coordinate rates `[nbody][3]` (m/s, rad/s). Written by `update_velocities`.
+    pub joint_qd: Vec<[Real; 3]>,
+    /// Prescribed joint accelerations, zero for free joints `[nbody][3]` (m/s², rad/s²).
+    /// Written by `update_positions`.
+    pub joint_qdd_prescribed: Vec<[Real; 3]>,
+    /// World pose of each joint frame `[nbody]`; its translation is the joint's position
+    /// `a` (m). Written by `update_positions`.
+    pub joint_frame: Vec<Pose>,
+    /// Motion subspace columns `S` of each joint `[nbody][3]`: the twist the body gains per
+    /// unit rate of each joint coordinate (world, referred to `O`). Written by
+    /// `update_positions`.
+    pub subspace: Vec<[Twist; 3]>,
+    /// World pose of each body frame `[nbody]`. Written by `update_positions`.
+    pub body_pose: Vec<Pose>,
+    /// World position of each body's centre of mass `[nbody]` (m). Written by
+    /// `update_positions`.
+    pub body_com: Vec<Vec2>,
+    /// Spatial inertia of each body `[nbody]` (world, referred to `O`). Written by
+    /// `update_positions`.
+    pub body_inertia: Vec<Inertia>,
+    /// Twist of each body `[nbody]` (rad/s, m/s; world, referred to `O`), including the
+    /// prescribed motions. Written by `update_velocities`.
+    pub body_twist: Vec<Twist>,
+    /// Remainder twist of each body `[nbody]`: its twist when `u = 0`, due to the prescribed
+    /// motions alone (rad/s, m/s) — the `v_t` of [P, Eq. (2)]. Written by
+    /// `update_velocities`.
+    pub body_twist_remainder: Vec<Twist>,
+    /// Velocity-product part of each body's spatial acceleration `[nbody]` (rad/s², m/s²):
+    /// `A_b = P_b A_parent + c_b + Σ S q̈` holds `c_b = Ṗ_b V_parent + Σ Ṡ q̇`. Written by
+    /// `update_velocities`.
+    pub body_accel_vp: Vec<Twist>,
+    /// Spatial acceleration of each body `[nbody]` (rad/s², m/s²) in the last
+    /// Newton–Euler pass. Written by `dynamics`.
+    pub body_accel: Vec<Twist>,
+    /// Net wrench transmitted by each body's joint in the last Newton–Euler pass `[nbody]`
+    /// (N·m, N; referred to `O`). Written by `dynamics`.
+    pub body_wrench: Vec<Wrench>,
+    /// Composite inertia of each body's subtree as seen through its joint `[nbody]`
+    /// (referred to `O`). Written by `dynamics::mass_matrix`.
+    pub composite: Vec<Inertia>,
+    /// Joint efforts of the last Newton–Euler pass `[nbody][3]` (N·m, N): the generalized
+    /// inertia and gravity forces `S_kᵀ F`; for prescribed joints after
+    /// `dynamics::power`, the effort the drive exerts. Written by `dynamics`.
+    pub joint_effort: Vec<[Real; 3]>,
+    /// Mass matrix `M(q)` `[nu × nu]` (kg, kg·m, kg·m²), symmetric positive definite
+    /// (`M = −M_paper`, [P, Eq. (68)]). Written by `dynamics::mass_matrix`.
+    pub mass: DMatrix<Real>,
+    /// Cholesky factor of `M`, `M = L Lᵀ`. Written by `dynamics::forward_dynamics`;
+    /// use it with [`crate::dynamics::solve_mass`].
+    pub mass_factor: MassFactor,
+    /// Bias forces `h(t, q, u)` `[nu]` (N, N·m): velocity products, gravity, force elements
+    /// and the coupling to the prescribed accelerations, so that `M u̇ = τ − h`. Written by
+    /// `dynamics::bias_forces`.
+    pub bias: DVector<Real>,
+    /// Generalized accelerations `u̇` `[nu]` (m/s², rad/s²). Written by
+    /// `dynamics::forward_dynamics`.
+    pub udot: DVector<Real>,
+    /// Generalized forces of the last inverse dynamics `M u̇ + h` `[nu]` (N, N·m). Written
+    /// by `dynamics::inverse_dynamics`.
+    pub tau: DVector<Real>,
+}
+
+impl Data {
+    /// Scratch space for `model`, every entry zero.
+    pub fn new(model: &Model) -> Self {
+        let nb = model.nbody();
+        let nu = model.nu();
+        Data {
+            time: 0.0,
+            joint_q: vec![[0.0; 3]; nb],
+            joint_qd: vec![[0.0; 3]; nb],
+            joint_qdd_prescribed: vec![[0.0; 3]; nb],
+            joint_frame: vec![Pose::IDENTITY; nb],
+            subspace: vec![[Twist::ZERO; 3]; nb],
+            body_pose: vec![Pose::IDENTITY; nb],
+            body_com: vec![Vec2::ZERO; nb],
+            body_inertia: vec![Inertia::ZERO; nb],
+            body_twist: vec![Twist::ZERO; nb],
+            body_twist_remainder: vec![Twist::ZERO; nb],
+            body_accel_vp: vec![Twist::ZERO; nb],
+            body_accel: vec![Twist::ZERO; nb],
+            body_wrench: vec![Wrench::ZERO; nb],
+            composite: vec![Inertia::ZERO; nb],
+            joint_effort: vec![[0.0; 3]; nb],
+            mass: DMatrix::zeros(nu, nu),
+            mass_factor: MassFactor::new(nu),
+            bias: DVector::zeros(nu),
+            udot: DVector::zeros(nu),
+            tau: DVector::zeros(nu),
+        }
+    }
+}

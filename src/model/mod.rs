@@ -1,1 +1,248 @@
-//! Placeholder: filled in by its own issue.
+//! The mechanical model: a kinematic tree of rigid bodies with minimal generalized
+//! coordinates, their force elements, prescribed motions, colliders and contact pairs.
+//! A [`Model`] is built once by a [`ModelBuilder`], validated, and never changes.
+//!
+//! ## Coordinates
+//!
+//! Body `i` is attached to its parent (a body added before it, or the world) by joint `i`
+//! ([`JointKind`]: revolute, prismatic, translation, planar or fixed). The joint
+//! coordinates of the free joints, in body order, are the generalized coordinates `q`
+//! (`nq` of them), and the generalized speeds are their rates, `u = q̇` (`nu = nq`). A
+//! joint with a [`PrescribedMotion`] contributes no coordinate: its position, rate and
+//! acceleration are known functions of time, and its rate produces the *remainder*
+//! velocities of [P, Eq. (2)]:
+//!
+//! ```text
+//! v^P = Σ_r v_r^P u_r + v_t^P
+//! ```
+//!
+//! ## Frames
+//!
+//! The world frame has `y` up when gravity is `(0, −g)`, angles are counter-clockwise. A
+//! body's frame is placed by its joint: `X_body = X_parent · placement · motion(q)`
+//! (see [`JointKind`]); for an absolute revolute joint the rotation of `X_parent` is
+//! dropped.
+
+mod body;
+mod builder;
+mod collider;
+mod error;
+mod joint;
+pub mod spatial;
+mod validate;
+
+pub use body::Body;
+pub use builder::ModelBuilder;
+pub use collider::{Collider, ContactPair, Material};
+pub use error::ModelError;
+pub use joint::{Joint, JointForce, JointKind, PrescribedMotion};
+
+use crate::math::Vec2;
+
+/// Index of a body of a [`Model`] (also the index of its joint, [`JointId`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyId(pub(crate) usize);
+
+/// Index of a joint of a [`Model`]; joint `i` attaches body `i` to its parent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct JointId(pub(crate) usize);
+
+/// Index of a collider of a [`Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ColliderId(pub(crate) usize);
+
+/// Index of a contact pair of a [`Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PairId(pub(crate) usize);
+
+macro_rules! id_index {
+    ($($t:ty),*) => {$(
+        impl $t {
+            /// The index in the model's list.
+            #[inline]
+            pub fn index(self) -> usize {
+                self.0
+            }
+        }
+    )*};
+}
+id_index!(BodyId, JointId, ColliderId, PairId);
+
+impl BodyId {
+    /// The joint that attaches this body to its parent.
+    #[inline]
+    pub fn joint(self) -> JointId {
+        JointId(self.0)
+    }
+}
+
+impl JointId {
+    /// The body this joint moves.
+    #[inline]
+    pub fn body(self) -> BodyId {
+        BodyId(self.0)
+    }
+}
+
+/// One generalized coordinate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coordinate {
+    /// Name `"<joint>.<suffix>"`, e.g. `"rodA.q"`, `"ball.y"`, `"rod.theta"`.
+    pub name: String,
+    /// The joint it belongs to.
+    pub joint: JointId,
+    /// Its index among the joint's coordinates.
+    pub dof: usize,
+    /// `true` for an angle (rad, rad/s), `false` for a length (m, m/s).
+    pub is_angle: bool,
+}
+
+/// The constant mechanical model (see the [module documentation](self)).
+#[derive(Clone, Debug)]
+pub struct Model {
+    bodies: Vec<Body>,
+    joints: Vec<Joint>,
+    colliders: Vec<Collider>,
+    pairs: Vec<ContactPair>,
+    gravity: Vec2,
+    coordinates: Vec<Coordinate>,
+    /// For each joint, the index in `q` of its first coordinate; `None` if prescribed or
+    /// fixed.
+    joint_q: Vec<Option<usize>>,
+    nq: usize,
+}
+
+impl Model {
+    /// A builder for a model.
+    pub fn builder() -> ModelBuilder {
+        ModelBuilder::new()
+    }
+
+    /// Number of generalized coordinates `nq`.
+    #[inline]
+    pub fn nq(&self) -> usize {
+        self.nq
+    }
+
+    /// Number of generalized speeds `nu` (`= nq`, since `u = q̇`).
+    #[inline]
+    pub fn nu(&self) -> usize {
+        self.nq
+    }
+
+    /// Number of bodies (and of joints).
+    #[inline]
+    pub fn nbody(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// The bodies, in tree order (parents before children).
+    #[inline]
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// The joints; joint `i` attaches body `i`.
+    #[inline]
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// The colliders.
+    #[inline]
+    pub fn colliders(&self) -> &[Collider] {
+        &self.colliders
+    }
+
+    /// The contact pairs.
+    #[inline]
+    pub fn pairs(&self) -> &[ContactPair] {
+        &self.pairs
+    }
+
+    /// Gravitational acceleration `g` (m/s², world frame).
+    #[inline]
+    pub fn gravity(&self) -> Vec2 {
+        self.gravity
+    }
+
+    /// The generalized coordinates, in the order of `q` and `u`.
+    #[inline]
+    pub fn coordinates(&self) -> &[Coordinate] {
+        &self.coordinates
+    }
+
+    /// The body `id`, if it exists.
+    #[inline]
+    pub fn body(&self, id: BodyId) -> Option<&Body> {
+        self.bodies.get(id.0)
+    }
+
+    /// The joint `id`, if it exists.
+    #[inline]
+    pub fn joint(&self, id: JointId) -> Option<&Joint> {
+        self.joints.get(id.0)
+    }
+
+    /// The collider `id`, if it exists.
+    #[inline]
+    pub fn collider(&self, id: ColliderId) -> Option<&Collider> {
+        self.colliders.get(id.0)
+    }
+
+    /// The contact pair `id`, if it exists.
+    #[inline]
+    pub fn pair(&self, id: PairId) -> Option<&ContactPair> {
+        self.pairs.get(id.0)
+    }
+
+    /// Index in `q` of the first coordinate of joint `id`; `None` for a prescribed or fixed
+    /// joint (or an unknown id).
+    #[inline]
+    pub fn q_index(&self, id: JointId) -> Option<usize> {
+        self.joint_q.get(id.0).copied().flatten()
+    }
+
+    /// All body ids, in tree order.
+    pub fn body_ids(&self) -> impl Iterator<Item = BodyId> + use<> {
+        (0..self.bodies.len()).map(BodyId)
+    }
+
+    /// All pair ids.
+    pub fn pair_ids(&self) -> impl Iterator<Item = PairId> + use<> {
+        (0..self.pairs.len()).map(PairId)
+    }
+
+    /// All collider ids.
+    pub fn collider_ids(&self) -> impl Iterator<Item = ColliderId> + use<> {
+        (0..self.colliders.len()).map(ColliderId)
+    }
+
+    /// The body named `name`.
+    pub fn body_by_name(&self, name: &str) -> Option<BodyId> {
+        self.bodies.iter().position(|b| b.name == name).map(BodyId)
+    }
+
+    /// The collider named `name`.
+    pub fn collider_by_name(&self, name: &str) -> Option<ColliderId> {
+        self.colliders
+            .iter()
+            .position(|c| c.name == name)
+            .map(ColliderId)
+    }
+
+    /// `true` if some joint has a prescribed motion (the model is rheonomic).
+    pub fn has_prescribed_motion(&self) -> bool {
+        self.joints.iter().any(|j| j.drive.is_some())
+    }
+
+    /// The ancestors of `body` from its parent up to the root (bodies only, not the world).
+    pub fn ancestors(&self, body: BodyId) -> impl Iterator<Item = BodyId> + '_ {
+        let mut next = self.joints.get(body.0).and_then(|j| j.parent);
+        std::iter::from_fn(move || {
+            let b = next?;
+            next = self.joints.get(b.0).and_then(|j| j.parent);
+            Some(b)
+        })
+    }
+}

@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod check;
 mod impact;
 mod inspect;
 
@@ -19,6 +20,8 @@ struct Cli {
 enum Command {
     /// Solve one-point impact problems read as JSON Lines from standard input.
     Impact(impact::Args),
+    /// Validate a scene and print its coordinates, initial state, mass matrix and energies as JSON.
+    Check(check::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
 }
@@ -27,6 +30,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Impact(args) => impact::run(args),
+        Command::Check(args) => check::run(args),
         Command::Inspect(args) => inspect::run(args),
     };
     match result {

@@ -1,0 +1,522 @@
+//! From the parsed file to a [`Model`], the initial [`State`] and the run [`Settings`],
+//! with the physical validation located at the offending value.
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+use nalgebra::DVector;
+use toml::Spanned;
+
+use crate::contact::{ContactError, signed_gap};
+use crate::kinematics::update_positions;
+use crate::math::{Real, Vec2};
+use crate::model::{Body, BodyId, Collider, ColliderId, Material, Model, ModelBuilder};
+use crate::settings::{IntegratorSettings, Settings};
+use crate::state::{Data, State};
+
+use super::SceneError;
+use super::error::Locator;
+use super::format::{BodySpec, ContactSpec, Pair, RunSpec, SceneFile};
+use super::units::{Kind, Quantity};
+
+/// The scene file version this loader reads.
+pub const VERSION: i64 = 1;
+
+/// Default largest overlap of two shapes at the start (m).
+pub const DEFAULT_OVERLAP_TOLERANCE: Real = 1e-9;
+
+/// Changes applied to a scene file while loading it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Overrides {
+    /// Number of links of the `[chain]` generator.
+    pub chain_links: Option<usize>,
+}
+
+/// What a scene file describes.
+pub(super) struct Built {
+    pub name: String,
+    pub description: String,
+    pub model: Model,
+    pub initial: State,
+    pub settings: Settings,
+}
+
+/// Where a name points.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Named {
+    Body(BodyId),
+    Obstacle(ColliderId),
+}
+
+/// The conversion in progress.
+pub(super) struct Builder<'a> {
+    pub(super) loc: &'a Locator<'a>,
+    pub(super) model: ModelBuilder,
+    pub(super) names: HashMap<String, Named>,
+    pub(super) q0: Vec<Real>,
+    pub(super) u0: Vec<Real>,
+    /// For each collider, the span its errors point at.
+    pub(super) collider_spans: Vec<Range<usize>>,
+    /// For each body, its colliders.
+    pub(super) body_colliders: HashMap<BodyId, Vec<ColliderId>>,
+}
+
+pub(super) fn build(
+    file: SceneFile,
+    loc: &Locator<'_>,
+    ov: &Overrides,
+) -> Result<Built, SceneError> {
+    if *file.version.get_ref() != VERSION {
+        return Err(loc.at(
+            file.version.span(),
+            format!(
+                "unsupported scene version {} (this ricochet reads version {VERSION})",
+                file.version.get_ref()
+            ),
+        ));
+    }
+    if file.name.get_ref().trim().is_empty() {
+        return Err(loc.at(file.name.span(), "the scene needs a name"));
+    }
+    let settings = settings(&file.run, loc)?;
+    let mut b = Builder {
+        loc,
+        model: ModelBuilder::new(),
+        names: HashMap::new(),
+        q0: Vec::new(),
+        u0: Vec::new(),
+        collider_spans: Vec::new(),
+        body_colliders: HashMap::new(),
+    };
+    let gravity = match &file.gravity {
+        Some(g) => b.pair(g)?,
+        None => Vec2::new(0.0, -9.81),
+    };
+    b.model.gravity(gravity);
+    if let Some(chain) = &file.chain {
+        b.chain(chain, ov.chain_links)?;
+    }
+    for i in tree_order(&file.body, &b.names, loc)? {
+        b.body(&file.body[i])?;
+    }
+    for obstacle in &file.obstacle {
+        b.obstacle(obstacle)?;
+    }
+    let tolerance = b.contact(file.contact.as_ref())?;
+    let Builder {
+        model,
+        q0,
+        u0,
+        collider_spans,
+        ..
+    } = b;
+    let model = model.build().map_err(|e| loc.model(e))?;
+    if let (None, Some(pair)) = (&file.contact, model.pairs().first()) {
+        return Err(loc.at(
+            collider_spans[pair.a.index()].clone(),
+            "the scene has contact pairs but no [contact] table: give at least `e` and `mu`",
+        ));
+    }
+    let initial = State::new(0.0, DVector::from_vec(q0), DVector::from_vec(u0));
+    check_overlaps(&model, &initial, tolerance, &collider_spans, loc)?;
+    Ok(Built {
+        name: file.name.into_inner(),
+        description: file.description.unwrap_or_default(),
+        model,
+        initial,
+        settings,
+    })
+}
+
+/// `[run]` → [`Settings`]: positive finite times, rates and tolerances.
+fn settings(run: &RunSpec, loc: &Locator<'_>) -> Result<Settings, SceneError> {
+    let positive = |v: &Spanned<Real>, what: &str| -> Result<Real, SceneError> {
+        let x = *v.get_ref();
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(loc.at(
+                v.span(),
+                format!("{what} must be a positive finite number, got {x}"),
+            ))
+        }
+    };
+    let mut settings = Settings {
+        t_end: positive(&run.t_end, "the end time")?,
+        ..Settings::default()
+    };
+    if let Some(rate) = &run.output_rate {
+        settings.output_rate = positive(rate, "the output rate")?;
+    }
+    let mut integ = IntegratorSettings::default();
+    if let Some(spec) = &run.integrator {
+        if let Some(m) = spec.method {
+            integ.method = m;
+        }
+        for (field, value, what) in [
+            (&mut integ.rtol, &spec.rtol, "rtol"),
+            (&mut integ.atol, &spec.atol, "atol"),
+            (&mut integ.dt, &spec.dt, "the step dt"),
+            (&mut integ.h_max, &spec.h_max, "h_max"),
+        ] {
+            if let Some(v) = value {
+                *field = positive(v, what)?;
+            }
+        }
+    }
+    settings.integrator = integ;
+    Ok(settings)
+}
+
+/// The order in which to add the bodies: parents before children, otherwise file order.
+/// Unknown parents and cycles are errors at the `parent` field.
+fn tree_order(
+    bodies: &[Spanned<BodySpec>],
+    generated: &HashMap<String, Named>,
+    loc: &Locator<'_>,
+) -> Result<Vec<usize>, SceneError> {
+    let index: HashMap<&str, usize> = bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (b.get_ref().name.get_ref().as_str(), i))
+        .collect();
+    // Parent of each body: None = world or a generated (chain) body.
+    let mut parent: Vec<Option<usize>> = Vec::with_capacity(bodies.len());
+    for body in bodies {
+        let p = match &body.get_ref().joint.get_ref().parent {
+            None => None,
+            Some(name) if name.get_ref() == "world" => None,
+            Some(name) => match (
+                index.get(name.get_ref().as_str()),
+                generated.get(name.get_ref()),
+            ) {
+                (Some(&i), _) => Some(i),
+                (None, Some(Named::Body(_))) => None,
+                _ => {
+                    let mut known: Vec<&str> = index.keys().copied().collect();
+                    known.sort_unstable();
+                    return Err(loc.at(
+                        name.span(),
+                        format!(
+                            "unknown parent body `{}` (bodies: world, {})",
+                            name.get_ref(),
+                            known.join(", ")
+                        ),
+                    ));
+                }
+            },
+        };
+        parent.push(p);
+    }
+    let mut placed = vec![false; bodies.len()];
+    let mut order = Vec::with_capacity(bodies.len());
+    while order.len() < bodies.len() {
+        let before = order.len();
+        for i in 0..bodies.len() {
+            if !placed[i] && parent[i].is_none_or(|p| placed[p]) {
+                placed[i] = true;
+                order.push(i);
+            }
+        }
+        if order.len() == before {
+            // Every remaining body waits for another: a cycle.
+            let cycle: Vec<&str> = (0..bodies.len())
+                .filter(|&i| !placed[i])
+                .map(|i| bodies[i].get_ref().name.get_ref().as_str())
+                .collect();
+            let first = (0..bodies.len()).find(|&i| !placed[i]).unwrap_or(0);
+            let span = bodies[first]
+                .get_ref()
+                .joint
+                .get_ref()
+                .parent
+                .as_ref()
+                .map_or(bodies[first].span(), |p| p.span());
+            return Err(loc.at(
+                span,
+                format!(
+                    "the parents of {} form a cycle: a kinematic tree has none",
+                    cycle.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(order)
+}
+
+impl Builder<'_> {
+    pub(super) fn err(&self, span: Range<usize>, message: impl Into<String>) -> SceneError {
+        self.loc.at(span, message)
+    }
+
+    /// A finite `[x, y]`.
+    pub(super) fn pair(&self, v: &Spanned<Pair>) -> Result<Vec2, SceneError> {
+        let [x, y] = *v.get_ref();
+        if x.is_finite() && y.is_finite() {
+            Ok(Vec2::new(x, y))
+        } else {
+            Err(self.err(
+                v.span(),
+                format!("[{x}, {y}] is not a pair of finite numbers"),
+            ))
+        }
+    }
+
+    pub(super) fn pair_or(
+        &self,
+        v: &Option<Spanned<Pair>>,
+        default: Vec2,
+    ) -> Result<Vec2, SceneError> {
+        v.as_ref().map_or(Ok(default), |v| self.pair(v))
+    }
+
+    /// A finite positive number.
+    pub(super) fn positive(
+        &self,
+        v: &Spanned<Real>,
+        what: &str,
+        unit: &str,
+    ) -> Result<Real, SceneError> {
+        let x = *v.get_ref();
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(
+                v.span(),
+                format!("{what} must be positive and finite, got {x} {unit}"),
+            ))
+        }
+    }
+
+    /// An optional quantity of the given kind.
+    pub(super) fn quantity(
+        &self,
+        v: &Option<Spanned<Quantity>>,
+        kind: Kind,
+    ) -> Result<Option<Real>, SceneError> {
+        match v {
+            None => Ok(None),
+            Some(v) => v
+                .get_ref()
+                .si(kind)
+                .map(Some)
+                .map_err(|m| self.err(v.span(), m)),
+        }
+    }
+
+    pub(super) fn quantity_or(
+        &self,
+        v: &Option<Spanned<Quantity>>,
+        kind: Kind,
+        default: Real,
+    ) -> Result<Real, SceneError> {
+        Ok(self.quantity(v, kind)?.unwrap_or(default))
+    }
+
+    /// Registers a body or obstacle name (unique, not `world`).
+    pub(super) fn name(&mut self, name: &Spanned<String>, what: Named) -> Result<(), SceneError> {
+        let n = name.get_ref();
+        if n.is_empty() || n == "world" {
+            return Err(self.err(
+                name.span(),
+                format!("`{n}` cannot name a body or an obstacle"),
+            ));
+        }
+        if self.names.insert(n.clone(), what).is_some() {
+            return Err(self.err(
+                name.span(),
+                format!("the name `{n}` is used twice (bodies and obstacles share names)"),
+            ));
+        }
+        Ok(())
+    }
+
+    pub(super) fn add_collider(&mut self, collider: Collider, span: Range<usize>) -> ColliderId {
+        let body = collider.body;
+        let id = self.model.add_collider(collider);
+        self.collider_spans.push(span);
+        if let Some(b) = body {
+            self.body_colliders.entry(b).or_default().push(id);
+        }
+        id
+    }
+
+    /// `[[body]]` with its joint and shapes. Its parent is already in the model.
+    pub(super) fn body(&mut self, spec: &Spanned<BodySpec>) -> Result<(), SceneError> {
+        let s = spec.get_ref();
+        let mass = self.positive(&s.mass, "the mass", "kg")?;
+        let inertia = self.positive(&s.inertia, "the moment of inertia", "kg·m²")?;
+        let com = self.pair_or(&s.com, Vec2::ZERO)?;
+        let name = s.name.get_ref().clone();
+        let parent = match &s.joint.get_ref().parent {
+            Some(p) if p.get_ref() != "world" => match self.names.get(p.get_ref()) {
+                Some(Named::Body(id)) => Some(*id),
+                _ => return Err(self.err(p.span(), format!("`{}` is not a body", p.get_ref()))),
+            },
+            _ => None,
+        };
+        let (joint, q, u) = self.joint(&name, s.joint.get_ref(), parent)?;
+        let id = self
+            .model
+            .add_body(Body::new(&name, mass, com, inertia), joint);
+        self.name(&s.name, Named::Body(id))?;
+        self.q0.extend(q);
+        self.u0.extend(u);
+        for (k, shape) in s.shape.iter().enumerate() {
+            let collider_name = match &shape.get_ref().name {
+                Some(n) => n.get_ref().clone(),
+                None if s.shape.len() == 1 => name.clone(),
+                None => format!("{name}/{k}"),
+            };
+            let (geometry, pose) = self.body_shape(shape)?;
+            let span = shape.get_ref().kind.span();
+            self.add_collider(Collider::new(collider_name, Some(id), geometry, pose), span);
+        }
+        Ok(())
+    }
+
+    /// `[contact]`: the default material and the pair rules. Returns the overlap tolerance.
+    pub(super) fn contact(
+        &mut self,
+        spec: Option<&Spanned<ContactSpec>>,
+    ) -> Result<Real, SceneError> {
+        let Some(spec) = spec else {
+            return Ok(DEFAULT_OVERLAP_TOLERANCE);
+        };
+        let c = spec.get_ref();
+        let base = Material {
+            law: c.law.unwrap_or(crate::impact::Law::Newton),
+            e: self.restitution(&c.e)?,
+            mu: self.friction(&c.mu)?,
+        };
+        self.model.default_material(base);
+        for p in &c.pair {
+            let [a, b] = p.between.get_ref();
+            let (ca, cb) = (self.colliders_named(a)?, self.colliders_named(b)?);
+            if a.get_ref() == b.get_ref() {
+                return Err(self.err(p.between.span(), "a pair needs two different names"));
+            }
+            if !ca
+                .iter()
+                .chain(&cb)
+                .any(|&c| self.model.colliders()[c.index()].body.is_some())
+            {
+                return Err(self.err(p.between.span(), "two obstacles of the world never touch"));
+            }
+            let material = Material {
+                law: p.law.unwrap_or(base.law),
+                e: p.e.as_ref().map_or(Ok(base.e), |e| self.restitution(e))?,
+                mu: p.mu.as_ref().map_or(Ok(base.mu), |m| self.friction(m))?,
+            };
+            for &x in &ca {
+                for &y in &cb {
+                    if p.enabled == Some(false) {
+                        self.model.disable_pair(x, y);
+                    } else {
+                        self.model.pair(x, y, Some(material));
+                    }
+                }
+            }
+        }
+        match &c.overlap_tolerance {
+            None => Ok(DEFAULT_OVERLAP_TOLERANCE),
+            Some(t) if t.get_ref().is_finite() && *t.get_ref() >= 0.0 => Ok(*t.get_ref()),
+            Some(t) => Err(self.err(
+                t.span(),
+                format!("the overlap tolerance must be ≥ 0, got {} m", t.get_ref()),
+            )),
+        }
+    }
+
+    /// The colliders of the body or obstacle `name`.
+    pub(super) fn colliders_named(
+        &self,
+        name: &Spanned<String>,
+    ) -> Result<Vec<ColliderId>, SceneError> {
+        match self.names.get(name.get_ref()) {
+            Some(Named::Obstacle(c)) => Ok(vec![*c]),
+            Some(Named::Body(b)) => match self.body_colliders.get(b) {
+                Some(v) if !v.is_empty() => Ok(v.clone()),
+                _ => Err(self.err(
+                    name.span(),
+                    format!("body `{}` has no shape", name.get_ref()),
+                )),
+            },
+            None => Err(self.err(
+                name.span(),
+                format!("no body or obstacle is named `{}`", name.get_ref()),
+            )),
+        }
+    }
+
+    pub(super) fn restitution(&self, e: &Spanned<Real>) -> Result<Real, SceneError> {
+        let x = *e.get_ref();
+        if x.is_finite() && (0.0..=1.0).contains(&x) {
+            Ok(x)
+        } else {
+            Err(self.err(
+                e.span(),
+                format!("the coefficient of restitution e must satisfy 0 ≤ e ≤ 1, got {x}"),
+            ))
+        }
+    }
+
+    pub(super) fn friction(&self, mu: &Spanned<Real>) -> Result<Real, SceneError> {
+        let x = *mu.get_ref();
+        if x.is_finite() && x >= 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(
+                mu.span(),
+                format!("the coefficient of friction mu must be ≥ 0 and finite, got {x}"),
+            ))
+        }
+    }
+}
+
+/// Every contact pair at the initial state: shapes may not overlap by more than
+/// `tolerance` (m); parry must support the pair.
+fn check_overlaps(
+    model: &Model,
+    initial: &State,
+    tolerance: Real,
+    spans: &[Range<usize>],
+    loc: &Locator<'_>,
+) -> Result<(), SceneError> {
+    let mut data = Data::new(model);
+    update_positions(model, &mut data, initial.t, initial.q.as_slice())
+        .map_err(|e| loc.at(0..0, e.to_string()))?;
+    for id in model.pair_ids() {
+        let Some(pair) = model.pair(id) else { continue };
+        let (a, b) = (
+            &model.colliders()[pair.a.index()],
+            &model.colliders()[pair.b.index()],
+        );
+        let span = spans.get(pair.a.index()).cloned().unwrap_or(0..0);
+        match signed_gap(model, &data, id, 0.0) {
+            Ok(Some(gap)) if gap < -tolerance => {
+                return Err(loc.at(
+                    span,
+                    format!(
+                        "`{}` and `{}` overlap by {:.3e} m at the start (tolerance {tolerance:.1e} m)",
+                        a.name, b.name, -gap
+                    ),
+                ));
+            }
+            Ok(_) => {}
+            Err(ContactError::Unsupported {
+                shape_a, shape_b, ..
+            }) => {
+                return Err(loc.at(
+                    span,
+                    format!(
+                        "`{}` ({shape_a}) and `{}` ({shape_b}) cannot be tested for contact",
+                        a.name, b.name
+                    ),
+                ));
+            }
+            Err(e) => return Err(loc.at(span, e.to_string())),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,218 @@
+//! `[body.joint]` → [`Joint`], its initial coordinates and speeds.
+
+use std::ops::Range;
+
+use toml::Spanned;
+
+use crate::math::{Pose, Real, Vec2};
+use crate::model::{BodyId, Joint, JointForce, JointKind, PrescribedMotion};
+
+use super::SceneError;
+use super::build::Builder;
+use super::format::{DriveSpec, JointSpec, JointType};
+use super::units::{Kind, Quantity};
+
+impl Builder<'_> {
+    /// The joint, its initial coordinates and speeds.
+    pub(super) fn joint(
+        &self,
+        name: &str,
+        s: &JointSpec,
+        parent: Option<BodyId>,
+    ) -> Result<(Joint, Vec<Real>, Vec<Real>), SceneError> {
+        use Kind::{Angle, AngularRate, Plain};
+        let ty = *s.kind.get_ref();
+        self.allowed_joint_fields(s, ty)?;
+        let at = self.pair_or(&s.at, Vec2::ZERO)?;
+        let orientation = self.quantity_or(&s.orientation, Angle, 0.0)?;
+        let placement = Pose::new(at, orientation);
+        let (kind, q, u) = match ty {
+            JointType::Revolute => (
+                JointKind::Revolute {
+                    absolute: s.absolute.as_ref().is_some_and(|a| *a.get_ref()),
+                },
+                vec![self.quantity_or(&s.angle, Angle, 0.0)?],
+                vec![self.quantity_or(&s.rate, AngularRate, 0.0)?],
+            ),
+            JointType::Prismatic => {
+                let axis = match &s.axis {
+                    None => {
+                        return Err(self.err(s.kind.span(), "a prismatic joint needs its `axis`"));
+                    }
+                    Some(a) => {
+                        let v = self.pair(a)?;
+                        v.try_normalize()
+                            .ok_or_else(|| self.err(a.span(), "the axis must not be zero"))?
+                    }
+                };
+                (
+                    JointKind::Prismatic { axis },
+                    vec![self.quantity_or(&s.position, Plain, 0.0)?],
+                    vec![self.quantity_or(&s.speed, Plain, 0.0)?],
+                )
+            }
+            JointType::Translation => (
+                JointKind::Translation,
+                vec![
+                    self.quantity_or(&s.x, Plain, 0.0)?,
+                    self.quantity_or(&s.y, Plain, 0.0)?,
+                ],
+                vec![
+                    self.quantity_or(&s.vx, Plain, 0.0)?,
+                    self.quantity_or(&s.vy, Plain, 0.0)?,
+                ],
+            ),
+            JointType::Planar => (
+                JointKind::Planar,
+                vec![
+                    self.quantity_or(&s.x, Plain, 0.0)?,
+                    self.quantity_or(&s.y, Plain, 0.0)?,
+                    self.quantity_or(&s.angle, Angle, 0.0)?,
+                ],
+                vec![
+                    self.quantity_or(&s.vx, Plain, 0.0)?,
+                    self.quantity_or(&s.vy, Plain, 0.0)?,
+                    self.quantity_or(&s.rate, AngularRate, 0.0)?,
+                ],
+            ),
+            JointType::Fixed => (JointKind::Fixed, vec![], vec![]),
+        };
+        let mut joint = Joint::new(name, kind, parent, placement);
+        let (coordinate, rate) = if ty == JointType::Revolute {
+            (Angle, AngularRate)
+        } else {
+            (Plain, Plain)
+        };
+        joint.force = JointForce {
+            stiffness: self.non_negative(&s.stiffness)?,
+            rest: self.quantity_or(&s.rest, coordinate, 0.0)?,
+            damping: self.non_negative(&s.damping)?,
+            effort: self.quantity_or(
+                if ty == JointType::Revolute {
+                    &s.torque
+                } else {
+                    &s.force
+                },
+                Plain,
+                0.0,
+            )?,
+        };
+        if let Some(drive) = &s.drive {
+            joint.drive = Some(self.drive(drive, q[0], coordinate, rate)?);
+            return Ok((joint, vec![], vec![]));
+        }
+        Ok((joint, q, u))
+    }
+
+    pub(super) fn non_negative(&self, v: &Option<Spanned<Quantity>>) -> Result<Real, SceneError> {
+        let x = self.quantity_or(v, Kind::Plain, 0.0)?;
+        match v {
+            Some(v) if x < 0.0 => Err(self.err(v.span(), format!("must be non-negative, got {x}"))),
+            _ => Ok(x),
+        }
+    }
+
+    /// `drive = { rate, amplitude, angular_frequency, phase }` with `q₀` the joint's
+    /// initial coordinate.
+    pub(super) fn drive(
+        &self,
+        d: &Spanned<DriveSpec>,
+        q0: Real,
+        coordinate: Kind,
+        rate: Kind,
+    ) -> Result<PrescribedMotion, SceneError> {
+        let s = d.get_ref();
+        Ok(PrescribedMotion {
+            q0,
+            rate: self.quantity_or(&s.rate, rate, 0.0)?,
+            amplitude: self.quantity_or(&s.amplitude, coordinate, 0.0)?,
+            angular_frequency: self.quantity_or(&s.angular_frequency, Kind::AngularRate, 0.0)?,
+            phase: self.quantity_or(&s.phase, Kind::Angle, 0.0)?,
+        })
+    }
+
+    /// Rejects the fields that a joint of type `ty` does not have.
+    pub(super) fn allowed_joint_fields(
+        &self,
+        s: &JointSpec,
+        ty: JointType,
+    ) -> Result<(), SceneError> {
+        let span = |v: &Option<Spanned<Quantity>>| v.as_ref().map(|v| v.span());
+        let present: [(&str, Option<Range<usize>>); 16] = [
+            ("absolute", s.absolute.as_ref().map(|v| v.span())),
+            ("axis", s.axis.as_ref().map(|v| v.span())),
+            ("angle", span(&s.angle)),
+            ("rate", span(&s.rate)),
+            ("position", span(&s.position)),
+            ("speed", span(&s.speed)),
+            ("x", span(&s.x)),
+            ("y", span(&s.y)),
+            ("vx", span(&s.vx)),
+            ("vy", span(&s.vy)),
+            ("stiffness", span(&s.stiffness)),
+            ("rest", span(&s.rest)),
+            ("damping", span(&s.damping)),
+            ("torque", span(&s.torque)),
+            ("force", span(&s.force)),
+            ("drive", s.drive.as_ref().map(|v| v.span())),
+        ];
+        let allowed: &[&str] = match ty {
+            JointType::Revolute => &[
+                "absolute",
+                "angle",
+                "rate",
+                "stiffness",
+                "rest",
+                "damping",
+                "torque",
+                "drive",
+            ],
+            JointType::Prismatic => &[
+                "axis",
+                "position",
+                "speed",
+                "stiffness",
+                "rest",
+                "damping",
+                "force",
+                "drive",
+            ],
+            JointType::Translation => &["x", "y", "vx", "vy"],
+            JointType::Planar => &["x", "y", "angle", "vx", "vy", "rate"],
+            JointType::Fixed => &[],
+        };
+        let tyname = format!("{ty:?}").to_lowercase();
+        for (field, span) in present {
+            let Some(span) = span else { continue };
+            if !allowed.contains(&field) {
+                let mut fields = vec!["type", "parent", "at", "orientation"];
+                fields.extend_from_slice(allowed);
+                return Err(self.err(
+                    span,
+                    format!(
+                        "a {tyname} joint has no field `{field}` (its fields: {})",
+                        fields.join(", ")
+                    ),
+                ));
+            }
+        }
+        if s.drive.is_some() {
+            let driven = [
+                ("rate", span(&s.rate)),
+                ("speed", span(&s.speed)),
+                ("stiffness", span(&s.stiffness)),
+                ("rest", span(&s.rest)),
+                ("damping", span(&s.damping)),
+                ("torque", span(&s.torque)),
+                ("force", span(&s.force)),
+            ];
+            if let Some((field, Some(span))) = driven.into_iter().find(|(_, s)| s.is_some()) {
+                return Err(self.err(
+                    span,
+                    format!("a driven joint has no `{field}`: its motion is prescribed by `drive`, which supplies whatever force it takes"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
