@@ -24,7 +24,7 @@
 //! `M_fp q̈_p`. The drive efforts `Q_p` come from the same pass run with the solved `u̇`
 //! ([`power`]).
 
-use nalgebra::DMatrix;
+use nalgebra::{Cholesky, DMatrix, DVectorViewMut, Dyn, SymmetricEigen};
 
 use crate::kinematics::{KinematicsError, check_len, update_positions, update_velocities};
 use crate::math::Real;
@@ -50,127 +50,97 @@ pub enum DynamicsError {
         /// Its value.
         value: Real,
     },
-    /// The mass matrix is not positive definite (the Cholesky pivot is not positive).
+    /// The mass matrix is not positive definite (its Cholesky factorization failed).
     #[error(
-        "at t = {t}: the mass matrix is not positive definite (Cholesky pivot {pivot} = {value})"
+        "at t = {t}: the mass matrix is not positive definite (smallest eigenvalue {min_eigenvalue})"
     )]
     NotPositiveDefinite {
         /// Time (s).
         t: Real,
-        /// Index of the failing pivot (a generalized coordinate).
-        pivot: usize,
-        /// The value under the square root.
-        value: Real,
+        /// The smallest eigenvalue of `M` (kg, kg·m², …; NaN if `M` is not finite).
+        min_eigenvalue: Real,
     },
     /// [`solve_mass`] was called before a successful factorization.
     #[error("the mass matrix has not been factored (call forward_dynamics first)")]
     NotFactored,
 }
 
-/// The Cholesky factorization `M = L Lᵀ` (`L` lower triangular) of the mass matrix, kept in
-/// a preallocated buffer so that refactoring allocates nothing. The impact map solves
-/// `M x = b` with it for several right-hand sides (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
+/// The Cholesky factorization `M = L Lᵀ` (`L` lower triangular) of the mass matrix,
+/// nalgebra's [`Cholesky`], kept with its buffer so that refactoring allocates nothing: the
+/// factor's matrix is taken back with `unpack_dirty`, overwritten with the new `M` and
+/// factored in place. The impact map solves `M x = b` with it for several right-hand sides
+/// (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
 #[derive(Clone, Debug)]
 pub struct MassFactor {
-    /// `L`, lower triangle (the strict upper triangle is not used).
-    l: DMatrix<Real>,
-    /// `1 / L_jj`: multiplying by it keeps divisions out of the inner loops.
-    inv_diag: Vec<Real>,
-    /// `true` after a successful factorization.
-    valid: bool,
+    /// The factor of the last mass matrix, if it was positive definite.
+    chol: Option<Cholesky<Real, Dyn>>,
+    /// The buffer when there is no factor (before the first factorization).
+    spare: Option<DMatrix<Real>>,
+    /// The dimension `nu`.
+    n: usize,
 }
 
 impl MassFactor {
     /// A factor buffer for an `n × n` matrix, not yet valid.
     pub fn new(n: usize) -> Self {
         MassFactor {
-            l: DMatrix::zeros(n, n),
-            inv_diag: vec![0.0; n],
-            valid: false,
+            chol: None,
+            spare: Some(DMatrix::zeros(n, n)),
+            n,
         }
     }
 
     /// `true` if it holds the factor of the last mass matrix.
     pub fn is_valid(&self) -> bool {
-        self.valid
+        self.chol.is_some()
     }
 
-    /// The lower triangular factor `L` of `M = L Lᵀ` (its strict upper triangle holds
-    /// nothing meaningful).
-    pub fn lower(&self) -> &DMatrix<Real> {
-        &self.l
+    /// The lower triangular factor `L` of `M = L Lᵀ` (a copy), if factored.
+    pub fn lower(&self) -> Option<DMatrix<Real>> {
+        self.chol.as_ref().map(|c| c.l())
     }
 
-    /// Factors the symmetric matrix `m` (its lower triangle is read) in place into
-    /// `M = L Lᵀ`, column by column with column updates (left-looking, "jki"):
+    /// Factors the symmetric matrix `m` (its lower triangle is read) into `M = L Lᵀ`.
     ///
-    /// ```text
-    /// c = M[j.., j] − Σ_{k<j} L_jk L[j.., k]      (one axpy per k, contiguous columns)
-    /// L_jj = √c_j,   L[j+1.., j] = c[j+1..] / L_jj
-    /// ```
-    ///
-    /// Returns the failing pivot and its value if a pivot is not positive (or not finite).
-    fn factor(&mut self, m: &DMatrix<Real>) -> Result<(), (usize, Real)> {
-        self.valid = false;
-        let n = m.nrows();
-        let src = m.as_slice();
-        let l = self.l.as_mut_slice();
-        for j in 0..n {
-            // Columns 0..j of L (done) and column j (being computed), contiguous.
-            let (done, rest) = l.split_at_mut(j * n);
-            let col_j = &mut rest[j..n];
-            col_j.copy_from_slice(&src[j * n + j..j * n + n]);
-            for k in 0..j {
-                let col_k = &done[k * n + j..k * n + n];
-                let ljk = col_k[0];
-                for (c, x) in col_j.iter_mut().zip(col_k) {
-                    *c -= ljk * x;
-                }
+    /// Returns the smallest eigenvalue of `m` if it is not positive definite (computed on
+    /// that cold path only; the buffer is then lost and reallocated at the next call).
+    fn factor(&mut self, m: &DMatrix<Real>) -> Result<(), Real> {
+        let mut buf = match (self.chol.take(), self.spare.take()) {
+            (Some(chol), _) => chol.unpack_dirty(),
+            (None, Some(buf)) => buf,
+            (None, None) => DMatrix::zeros(self.n, self.n),
+        };
+        buf.copy_from(m);
+        match Cholesky::new(buf) {
+            Some(chol) => {
+                self.chol = Some(chol);
+                Ok(())
             }
-            let d = col_j[0];
-            if !(d > 0.0 && d.is_finite()) {
-                return Err((j, d));
-            }
-            let ljj = d.sqrt();
-            let inv = 1.0 / ljj;
-            col_j[0] = ljj;
-            for c in &mut col_j[1..] {
-                *c *= inv;
-            }
-            self.inv_diag[j] = inv;
+            None => Err(smallest_eigenvalue(m)),
         }
-        self.valid = true;
-        Ok(())
     }
 
     /// Solves `M x = b` in place (`b` becomes `x`): `L y = b` forward, then `Lᵀ x = y`
     /// backward.
     pub fn solve_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
-        if !self.valid {
-            return Err(DynamicsError::NotFactored);
-        }
-        let n = self.l.nrows();
-        check_len("right-hand side", n, b.len())?;
-        let l = self.l.as_slice();
-        // L y = b, column by column: y_j = b_j / L_jj, then b[j+1..] −= L[j+1.., j] y_j.
-        for j in 0..n {
-            b[j] *= self.inv_diag[j];
-            let yj = b[j];
-            for (bk, lkj) in b[j + 1..].iter_mut().zip(&l[j * n + j + 1..j * n + n]) {
-                *bk -= lkj * yj;
-            }
-        }
-        // Lᵀ x = y from the last: x_j = (y_j − Σ_{k>j} L_kj x_k) / L_jj.
-        for j in (0..n).rev() {
-            let below: Real = l[j * n + j + 1..j * n + n]
-                .iter()
-                .zip(&b[j + 1..])
-                .map(|(lkj, xk)| lkj * xk)
-                .sum();
-            b[j] = (b[j] - below) * self.inv_diag[j];
-        }
+        let chol = self.chol.as_ref().ok_or(DynamicsError::NotFactored)?;
+        check_len("right-hand side", self.n, b.len())?;
+        chol.solve_mut(&mut DVectorViewMut::from_slice(b, self.n));
         Ok(())
     }
+}
+
+/// The smallest eigenvalue of a symmetric matrix (the evidence of a failed factorization).
+#[cold]
+fn smallest_eigenvalue(m: &DMatrix<Real>) -> Real {
+    if m.iter().any(|x| !x.is_finite()) {
+        return Real::NAN;
+    }
+    SymmetricEigen::new(m.clone())
+        .eigenvalues
+        .iter()
+        .copied()
+        .fold(Real::INFINITY, Real::min)
 }
 
 /// Kinetic and potential energy.
@@ -433,7 +403,7 @@ pub fn forward_dynamics_with(
     // M = L Lᵀ.
     data.mass_factor
         .factor(&data.mass)
-        .map_err(|(pivot, value)| DynamicsError::NotPositiveDefinite { t, pivot, value })?;
+        .map_err(|min_eigenvalue| DynamicsError::NotPositiveDefinite { t, min_eigenvalue })?;
     // u̇ = M⁻¹ (τ − h).
     for r in 0..model.nu() {
         data.udot[r] = tau.map_or(0.0, |tau| tau[r]) - data.bias[r];
@@ -473,7 +443,7 @@ pub fn solve_mass(data: &Data, b: &mut [Real]) -> Result<(), DynamicsError> {
 pub fn factor_mass_matrix(data: &mut Data, t: Real) -> Result<(), DynamicsError> {
     data.mass_factor
         .factor(&data.mass)
-        .map_err(|(pivot, value)| DynamicsError::NotPositiveDefinite { t, pivot, value })
+        .map_err(|min_eigenvalue| DynamicsError::NotPositiveDefinite { t, min_eigenvalue })
 }
 
 /// The kinetic energy, [P, Eq. (70)], with the full velocities (prescribed motions

@@ -504,11 +504,11 @@ fn the_factor_solves_mass_systems_and_reports_failures() {
     let mut x = rhs.clone();
     solve_mass(&data, x.as_mut_slice()).unwrap();
     assert!((&data.mass * &x - &rhs).amax() < 1e-12 * (1.0 + max_abs(&data.mass) * x.amax()));
-    let l_fac = data.mass_factor.lower().clone();
+    let l_fac = data.mass_factor.lower().unwrap();
     let lower = DMatrix::from_fn(n, n, |i, j| if i >= j { l_fac[(i, j)] } else { 0.0 });
     assert!(max_abs(&(&lower * lower.transpose() - &data.mass)) < 1e-12 * max_abs(&data.mass));
 
-    // A matrix that is not positive definite is reported with its pivot and t.
+    // A matrix that is not positive definite is reported with its smallest eigenvalue and t.
     data.mass.fill(0.0);
     data.mass[(0, 0)] = -1.0;
     let err = factor_mass_matrix(&mut data, 1.25).unwrap_err();
@@ -516,8 +516,7 @@ fn the_factor_solves_mass_systems_and_reports_failures() {
         err,
         DynamicsError::NotPositiveDefinite {
             t: 1.25,
-            pivot: 0,
-            value: -1.0
+            min_eigenvalue: -1.0
         }
     );
     assert!(err.to_string().contains("t = 1.25"));
