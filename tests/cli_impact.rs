@@ -114,7 +114,7 @@ fn every_kind_of_bad_line_is_an_error_line_and_the_rest_is_processed() {
         ),
         (
             r#"{"w": [1, 2, 1], "v_a": [-1, 0], "e": 0.5, "mu": 0.1}"#,
-            "not positive definite",
+            "not positive semidefinite",
         ),
         (
             r#"{"w": [1, 0, 1], "v_a": [0, 1], "e": 0.5, "mu": 0.1}"#,

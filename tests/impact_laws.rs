@@ -587,7 +587,7 @@ fn bad_input_is_a_typed_error() {
     let cases: Vec<(ImpactProblem, IsError)> = vec![
         (
             ImpactProblem {
-                w: ImpactMatrix::new(1.0, 1.0, 1.0),
+                w: ImpactMatrix::new(1.0, 1.0, 0.99),
                 ..ok
             },
             |e| matches!(e, ImpactError::NotPositiveDefinite { .. }),
@@ -608,7 +608,14 @@ fn bad_input_is_a_typed_error() {
         ),
         (
             ImpactProblem {
-                w: ImpactMatrix::new(1.0, 0.0, 0.0),
+                w: ImpactMatrix::new(0.0, 0.0, 1.0),
+                ..ok
+            },
+            |e| matches!(e, ImpactError::NotPositiveDefinite { .. }),
+        ),
+        (
+            ImpactProblem {
+                w: ImpactMatrix::new(1.0, 0.0, -1e-9),
                 ..ok
             },
             |e| matches!(e, ImpactError::NotPositiveDefinite { .. }),
@@ -673,5 +680,89 @@ fn bad_input_is_a_typed_error() {
             assert!(matches!(err, ImpactError::NonFinite { .. }), "{err}");
             assert!(err.to_string().contains("not finite"));
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Singular W (the extension beyond [P, Eq. (24)], Δ = 0)
+
+/// A singular W: rank 1, `m_tt [[k², k], [k, 1]]` (the contact velocity moves along a
+/// line, as for a one-degree-of-freedom system), or `m_tt = m_nt = 0` (no tangential
+/// mobility, as for a ball on a vertical slide).
+fn singular() -> impl Strategy<Value = ImpactMatrix> {
+    prop_oneof![
+        3 => (-3.0..3.0f64, -2.0..2.0f64, any::<bool>()).prop_map(|(tt, k, neg)| {
+            let tt = 10f64.powf(tt);
+            let k = if neg { -(10f64.powf(k)) } else { 10f64.powf(k) };
+            ImpactMatrix::new(tt * k * k, tt * k, tt)
+        }),
+        1 => (-3.0..3.0f64).prop_map(|nn| ImpactMatrix::new(10f64.powf(nn), 0.0, 0.0)),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4000))]
+
+    /// With a singular W every law either solves the impact, satisfying Eqs. (22)–(23),
+    /// Coulomb and its end condition, or reports a jam, and only where friction can hold
+    /// the contact (`m_tt > 0`, `|m_nt| ≤ μ m_tt`: sticking is feasible and freezes v_n).
+    #[test]
+    fn singular_w_solves_or_jams(w in singular(), v in approach(), e in restitution(), mu in friction(), law in law()) {
+        let v = if w.tt == 0.0 { ContactVelocity::new(v.n, 0.0) } else { v };
+        let pb = ImpactProblem::new(w, v, e, mu);
+        match impact::solve(law, &pb) {
+            Ok(out) => {
+                let tol = 1e-9 * vscale(&pb, &out);
+                let res = momentum_residual(&pb, Vector2::new(out.impulse.n, out.impulse.t), Vector2::new(out.v_s.n, out.v_s.t));
+                prop_assert!(res.norm() <= tol, "residual {res:?}");
+                prop_assert!(out.impulse.t.abs() <= pb.mu * out.impulse.n * (1.0 + 1e-12));
+                if matches!(law, Law::Newton | Law::KaneLevinson) {
+                    prop_assert!((out.v_s.n - pb.e * -pb.v_a.n).abs() <= tol);
+                }
+                let escale = (out.impulse.n + out.impulse.t.abs()) * vscale(&pb, &out);
+                prop_assert!((out.work_n + out.work_t - out.delta_e).abs() <= 1e-9 * escale);
+                if w.tt == 0.0 {
+                    prop_assert_eq!(out.impulse.t, 0.0);
+                    // v_n is linear in I_n, so every law gives Newton's jump (1 + e) V.
+                    prop_assert!((out.impulse.n * w.nn - (1.0 + pb.e) * -pb.v_a.n).abs() <= tol);
+                }
+            }
+            Err(ImpactError::Jam { .. }) => {
+                prop_assert!(w.tt > 0.0 && w.nt.abs() <= mu * w.tt * (1.0 + 1e-12), "jam without a holding cone: {w:?} μ {mu}");
+            }
+            Err(other) => prop_assert!(false, "{other}"),
+        }
+    }
+}
+
+#[test]
+fn one_degree_of_freedom_pendulum_impact() {
+    // A rank-1 W as a pendulum gives it: J_n = a, J_t = b (1×1), M = m:
+    // W = [[a², ab], [ab, b²]] / m. With μ |a/b| < 1 (Case 3), Newton's reverse sliding and
+    // forward sliding closed forms hold without Δ; the impact reverses the one speed u with
+    // Δu = (a I_n + b I_t)/m, and v_n^S = e V means a (u + Δu) = −e a u.
+    let (a, b, m) = (1.0, -0.05, 1.2);
+    let w = ImpactMatrix::new(a * a / m, a * b / m, b * b / m);
+    assert!(w.is_singular());
+    let u = -2.0; // the contact approaches: v_n = a u < 0
+    let v = ContactVelocity::new(a * u, -(b * u)); // t oriented so that v_t ≥ 0
+    let w = ImpactMatrix::new(w.nn, -w.nt, w.tt);
+    for law in Law::ALL {
+        let out = impact::solve(law, &ImpactProblem::new(w, v, 0.7, 0.2)).unwrap();
+        let du = (a * out.impulse.n - b * out.impulse.t) / m;
+        if matches!(law, Law::Newton | Law::KaneLevinson) {
+            assert!(
+                (a * (u + du) + 0.7 * a * u).abs() < 1e-12,
+                "{law:?}: u⁺ = {}",
+                u + du
+            );
+        }
+        // The energy change of the pendulum equals Eq. (29).
+        let de = 0.5 * m * ((u + du).powi(2) - u * u);
+        assert!(
+            (de - out.delta_e).abs() < 1e-12,
+            "{law:?}: {de} vs {}",
+            out.delta_e
+        );
     }
 }

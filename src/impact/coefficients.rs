@@ -19,7 +19,8 @@ pub struct Coefficients {
     pub p: Real,
     /// `q = m_nn + μ m_nt`: `dv_n/dI_n` during reverse sliding.
     pub q: Real,
-    /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)].
+    /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)]; exactly 0 when `W` is singular to working
+    /// precision ([`ImpactMatrix::is_singular`]).
     pub det: Real,
     /// `|v_n^A|` (m/s).
     v_n: Real,
@@ -41,7 +42,7 @@ impl Coefficients {
             h: w.nn - mu * w.nt,
             p: mu * w.tt + w.nt,
             q: w.nn + mu * w.nt,
-            det: w.det(),
+            det: if w.is_singular() { 0.0 } else { w.det() },
             v_n: -v_a.n,
             v_t: v_a.t,
         }

@@ -1,11 +1,11 @@
 //! Newton's hypothesis without the bisection of the collision time: the theory of Kane
 //! and Levinson [P, Appendix C].
 
-use super::LawSolution;
 use super::coefficients::Coefficients;
 use super::outcome::CollisionType;
 use super::path::{PathPoint, Phases};
 use super::problem::{ContactVelocity, ImpactProblem, Impulse};
+use super::{Failure, LawSolution};
 
 /// One single-phase candidate and whether it is coherent.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,14 +41,26 @@ pub fn candidates(pb: &ImpactProblem, c: &Coefficients) -> [Candidate; 3] {
     let v_n_s = e * big_v;
     let forward_side = c.h * vt - (1.0 + e) * c.g * big_v;
     let reverse_side = c.q * vt + (1.0 + e) * c.p * big_v;
-    let stick = Candidate {
-        kind: CollisionType::Sticking,
-        impulse: Impulse::new(
-            ((1.0 + e) * w.tt * big_v + w.nt * vt) / c.det,
-            -(w.nn * vt + (1.0 + e) * w.nt * big_v) / c.det,
-        ),
-        v_s: ContactVelocity::new(v_n_s, 0.0),
-        coherent: forward_side < 0.0 && reverse_side >= 0.0,
+    // DEVIATION from Eq. (73), which needs Δ > 0: with a singular W, W I = ((1+e)V, −v_t^A)
+    // has (generically) no solution when m_tt > 0; when m_tt = 0 it has one with I_t free
+    // if v_t^A = 0, and the least is I_t = 0.
+    let stick = if c.det > 0.0 {
+        Candidate {
+            kind: CollisionType::Sticking,
+            impulse: Impulse::new(
+                ((1.0 + e) * w.tt * big_v + w.nt * vt) / c.det,
+                -(w.nn * vt + (1.0 + e) * w.nt * big_v) / c.det,
+            ),
+            v_s: ContactVelocity::new(v_n_s, 0.0),
+            coherent: forward_side < 0.0 && reverse_side >= 0.0,
+        }
+    } else {
+        Candidate {
+            kind: CollisionType::Sticking,
+            impulse: Impulse::new((1.0 + e) * big_v / w.nn, 0.0),
+            v_s: ContactVelocity::new(v_n_s, 0.0),
+            coherent: w.tt == 0.0 && vt == 0.0,
+        }
     };
     let i_rev = (1.0 + e) * big_v / c.q;
     let reverse = Candidate {
@@ -73,7 +85,11 @@ pub fn candidates(pb: &ImpactProblem, c: &Coefficients) -> [Candidate; 3] {
 /// `½ I_n (v_n^A + v_n^S)` and `½ I_t (v_t^A + v_t^S)`, the two terms of Eq. (29).
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let Some(chosen) = candidates(pb, c).into_iter().find(|k| k.coherent) else {
-        return LawSolution::failed("no coherent candidate (Appendix C says there always is one)");
+        return LawSolution::failed(if c.det == 0.0 {
+            Failure::Jam
+        } else {
+            Failure::Incoherent("no coherent candidate (Appendix C says there always is one)")
+        });
     };
     let (i, v_a, v_s) = (chosen.impulse, pb.v_a, chosen.v_s);
     let end = PathPoint {

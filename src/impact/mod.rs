@@ -1,6 +1,22 @@
 //! The one-point planar impact laws with Coulomb friction of [P], as pure functions of
 //! `(W, v^A, e, μ)`. Nothing here knows about bodies.
 //!
+//! ## Singular W (a departure from the paper)
+//!
+//! [P, Eq. (24)] asserts `Δ = m_nn m_tt − m_nt² > 0`, which holds only when the normal and
+//! tangential partial velocities of the contact are independent. With minimal coordinates
+//! they often are not: a pendulum has one speed, a ball on a vertical slide cannot move
+//! sideways. Then `W` is positive *semi*definite, the contact velocity moves along a line,
+//! and the laws are extended as follows (derived from Eqs. (22)–(23) on Routh's path;
+//! tested against a march in the impulse plane):
+//! - forward and reverse sliding keep their closed forms, which never divide by `Δ`;
+//! - with `m_tt = m_nt = 0` the tangential impulse does nothing: without tangential
+//!   approach the contact sticks with the least impulse, `I_t = 0`;
+//! - with rank 1 and `m_tt > 0`, sticking (feasible when `|m_nt| ≤ μ m_tt`) freezes the
+//!   normal velocity (`dv_n/dI_n = Δ/m_tt = 0`): if the path reaches it while the contact
+//!   still approaches, no finite impulse meets the end condition, and the law reports
+//!   [`ImpactError::Jam`] instead of dividing by zero.
+//!
 //! ```
 //! use ricochet::impact::{self, ContactVelocity, ImpactMatrix, ImpactProblem, Law};
 //!
@@ -100,14 +116,23 @@ pub struct LawSolution {
     pub v_s: ContactVelocity,
     /// The phases along the law's path in the impulse plane.
     pub phases: Phases,
-    /// Why the law found no solution (impossible for valid data; reported as
-    /// [`ImpactError::Incoherent`]).
-    pub failure: Option<&'static str>,
+    /// Why the law found no solution.
+    pub failure: Option<Failure>,
+}
+
+/// Why a law found no solution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Failure {
+    /// `W` is singular and friction holds the approaching contact: [`ImpactError::Jam`].
+    Jam,
+    /// A condition that cannot fail for valid data failed (a bug):
+    /// [`ImpactError::Incoherent`].
+    Incoherent(&'static str),
 }
 
 impl LawSolution {
     /// A law's report that it found no solution.
-    fn failed(why: &'static str) -> Self {
+    fn failed(why: Failure) -> Self {
         let nowhere = PathPoint::default();
         Self {
             kind: CollisionType::Sticking,
@@ -152,8 +177,10 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
         Law::Poisson => poisson::solve(&pb, &c),
         Law::Stronge => stronge::solve(&pb, &c),
     };
-    if let Some(why) = sol.failure {
-        return Err(incoherent(law.name(), why.to_owned()));
+    match sol.failure {
+        None => {}
+        Some(Failure::Jam) => return Err(ImpactError::Jam { law: law.name() }),
+        Some(Failure::Incoherent(why)) => return Err(incoherent(law.name(), why.to_owned())),
     }
     check_coherence(law, &pb, &sol)?;
     if mirrored {

@@ -1,10 +1,10 @@
 //! Newton's hypothesis with the bisection of the collision time [P, Sects. 3–4].
 
-use super::LawSolution;
 use super::coefficients::{Coefficients, SignCase};
 use super::outcome::CollisionType;
 use super::path::RouthPath;
 use super::problem::{ContactVelocity, ImpactProblem, Impulse};
+use super::{Failure, LawSolution};
 use crate::math::Real;
 
 /// The type of a collision under Newton's hypothesis on Routh's path.
@@ -55,8 +55,23 @@ pub fn solve(pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolutio
     let big_v = -pb.v_a.n;
     let vt = pb.v_a.t;
     let w = &pb.w;
-    let kind = collision_type(c, case, e, pb.v_a);
+    // With m_tt = 0 (then m_nt = 0) the tangent is immobile: without tangential approach
+    // the contact sticks with the least friction impulse, I_t = 0.
+    let kind = if w.tt == 0.0 && vt == 0.0 {
+        CollisionType::Sticking
+    } else {
+        collision_type(c, case, e, pb.v_a)
+    };
     let (impulse, v_st) = match kind {
+        // DEVIATION from Eq. (47), which needs Δ > 0: with a singular W the sticking phase
+        // cannot raise v_n (dv_n/dI_n = Δ/m_tt = 0), so the contact jams, unless m_tt = 0
+        // (I_n = (1+e) V / m_nn, I_t = 0).
+        CollisionType::Sticking if c.det == 0.0 => {
+            if w.tt > 0.0 {
+                return LawSolution::failed(Failure::Jam);
+            }
+            (Impulse::new((1.0 + e) * big_v / w.nn, 0.0), 0.0)
+        }
         CollisionType::Sticking => (
             Impulse::new(
                 ((1.0 + e) * w.tt * big_v + w.nt * vt) / c.det,

@@ -179,7 +179,7 @@ impl RouthPath {
     ///   (for `v_t^A = 0`: at once if `g ≥ 0`);
     /// - then sticking (`L_ST`, Eq. 56) if the friction cone holds the contact,
     ///   `|m_nt| ≤ μ m_tt` ⇔ `g ≥ 0, p ≥ 0` (Eq. 59): `dĨ_t = −(m_nt/m_tt) dĨ_n`,
-    ///   `dv_n = (Δ/m_tt) dĨ_n`, `dv_t = 0`;
+    ///   `dv_n = (Δ/m_tt) dĨ_n`, `dv_t = 0` (for `m_tt = 0`: `dĨ_t = 0`, `dv_n = m_nn`);
     /// - or reverse sliding (`L_RS`, Eq. 57) if `p < 0` (Eq. 60): `dĨ_t = μ dĨ_n`,
     ///   `dv_n = q dĨ_n`, `dv_t = p dĨ_n`.
     pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
@@ -217,11 +217,19 @@ impl RouthPath {
         // At G the slip is zero by definition (Eq. 39); do not keep the rounding residue.
         at_g.v.t = 0.0;
         let (after, after_slope) = if p >= 0.0 {
+            // Sticking. With m_tt = 0 (then m_nt = 0) the tangential impulse does nothing:
+            // take the least, I_t = 0, and v_n grows at m_nn. With a singular W and
+            // m_tt > 0, Δ = 0 and v_n is frozen: the contact jams.
+            let (di_t, dv_n) = if w.tt > 0.0 {
+                (-w.nt / w.tt, c.det / w.tt)
+            } else {
+                (0.0, w.nn)
+            };
             (
                 CollisionType::Sticking,
                 Slope {
-                    di_t: -w.nt / w.tt,
-                    dv_n: w.det() / w.tt,
+                    di_t,
+                    dv_n,
                     dv_t: 0.0,
                 },
             )

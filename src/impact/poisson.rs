@@ -1,9 +1,9 @@
 //! Poisson's kinetic hypothesis on Routh's path.
 
-use super::LawSolution;
 use super::coefficients::Coefficients;
 use super::path::RouthPath;
 use super::problem::ImpactProblem;
+use super::{Failure, LawSolution};
 
 /// Solves the problem (paper's frame, `v_t^A ≥ 0`) under Poisson's hypothesis: the
 /// restitution impulse is `e` times the compression impulse, on Routh's path.
@@ -16,7 +16,11 @@ use super::problem::ImpactProblem;
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
     let Some(i_c) = path.reach_normal_velocity(0.0) else {
-        return LawSolution::failed("compression never ends");
+        return LawSolution::failed(if c.det == 0.0 {
+            Failure::Jam
+        } else {
+            Failure::Incoherent("compression never ends")
+        });
     };
     let i_n = (1.0 + pb.e) * i_c;
     let phases = path.phases_until(i_n);

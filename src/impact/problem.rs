@@ -44,6 +44,19 @@ impl ImpactMatrix {
         }
     }
 
+    /// Whether `W` is singular to working precision: `Δ ≤ 16 ε m_nn m_tt` (rank 1, or
+    /// `m_tt = 0`).
+    ///
+    /// DEVIATION from [P, Eq. (24)]: the paper takes `Δ > 0` for granted, which holds only
+    /// when the 2×p matrix `C` of partial velocities has rank 2. With minimal coordinates
+    /// it often has rank 1: a pendulum (p = 1), a ball on a vertical slide. Then the contact
+    /// velocity moves along a line, `W` is positive *semi*definite, and the laws here are
+    /// extended to it (see [`crate::impact`]).
+    #[inline]
+    pub fn is_singular(&self) -> bool {
+        self.det() <= SINGULAR_RELATIVE_DET * self.nn * self.tt
+    }
+
     /// The same matrix in the frame whose tangent is `−t`: `m_nt` changes sign.
     #[inline]
     pub fn mirrored(&self) -> Self {
@@ -113,9 +126,9 @@ pub enum ImpactError {
         /// Its value.
         value: Real,
     },
-    /// `W` is not (numerically) positive definite.
+    /// `W` is not symmetric positive semidefinite with `m_nn > 0`.
     #[error(
-        "W is not positive definite: m_nn = {nn}, m_nt = {nt}, m_tt = {tt}, \
+        "W is not positive semidefinite with m_nn > 0: m_nn = {nn}, m_nt = {nt}, m_tt = {tt}, \
          Δ = m_nn m_tt − m_nt² = {det}"
     )]
     NotPositiveDefinite {
@@ -146,6 +159,18 @@ pub enum ImpactError {
         /// `μ`.
         mu: Real,
     },
+    /// `W` is singular and friction holds the contact while it still approaches: the
+    /// impulse would grow without bound before the law's end condition is met (Cases 2
+    /// and 4 of Table 1 with `Δ = 0`). A jam of rigid-body contact, like Painlevé's.
+    #[error(
+        "the contact jams under {law}: W is singular (the contact velocity can only move \
+         along a line) and friction holds it while it still approaches, so no finite \
+         impulse meets the end condition"
+    )]
+    Jam {
+        /// The law's name.
+        law: &'static str,
+    },
     /// The law's solution fails a coherence condition of [P, Sect. 4.2] beyond rounding:
     /// a bug, never an expected outcome.
     #[error("incoherent {law} solution: {detail}")]
@@ -157,9 +182,9 @@ pub enum ImpactError {
     },
 }
 
-/// The smallest relative determinant `Δ / (m_nn m_tt)` accepted: below it `W` is
-/// singular to working precision and the closed forms divide by rounding noise.
-const MIN_RELATIVE_DET: Real = 16.0 * Real::EPSILON;
+/// The relative determinant `Δ / (m_nn m_tt)` at or below which `W` is singular to
+/// working precision: the closed forms would divide by rounding noise.
+const SINGULAR_RELATIVE_DET: Real = 16.0 * Real::EPSILON;
 
 impl ImpactProblem {
     /// The problem from its four data.
@@ -167,7 +192,8 @@ impl ImpactProblem {
         Self { w, v_a, e, mu }
     }
 
-    /// Checks the data: finite numbers, `W` positive definite, `v_n^A < 0`,
+    /// Checks the data: finite numbers, `W` positive semidefinite with `m_nn > 0` (the
+    /// normal direction must be mobile; see [`ImpactMatrix::is_singular`]), `v_n^A < 0`,
     /// `e ∈ [0, 1]`, `μ ≥ 0`.
     pub fn validate(&self) -> Result<(), ImpactError> {
         let all_finite = self.w.nn.is_finite()
@@ -181,7 +207,10 @@ impl ImpactProblem {
             return Err(self.first_non_finite());
         }
         let det = self.w.det();
-        if !(self.w.nn > 0.0 && self.w.tt > 0.0 && det > MIN_RELATIVE_DET * self.w.nn * self.w.tt) {
+        if !(self.w.nn > 0.0
+            && self.w.tt >= 0.0
+            && det >= -SINGULAR_RELATIVE_DET * self.w.nn * self.w.tt)
+        {
             return Err(ImpactError::NotPositiveDefinite {
                 nn: self.w.nn,
                 nt: self.w.nt,

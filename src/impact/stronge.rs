@@ -1,9 +1,9 @@
 //! Stronge's energetic hypothesis on Routh's path.
 
-use super::LawSolution;
 use super::coefficients::Coefficients;
 use super::path::RouthPath;
 use super::problem::ImpactProblem;
+use super::{Failure, LawSolution};
 
 /// Solves the problem (paper's frame, `v_t^A ≥ 0`) under Stronge's hypothesis: the work
 /// of the normal impulse during restitution is `e²` times minus its work during
@@ -17,12 +17,16 @@ use super::problem::ImpactProblem;
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
     let Some(i_c) = path.reach_normal_velocity(0.0) else {
-        return LawSolution::failed("compression never ends");
+        return LawSolution::failed(if c.det == 0.0 {
+            Failure::Jam
+        } else {
+            Failure::Incoherent("compression never ends")
+        });
     };
     let compression = path.at(i_c);
     let restitution_work = -pb.e * pb.e * compression.work_n;
     let Some(i_n) = path.reach_normal_work(&compression, restitution_work) else {
-        return LawSolution::failed("restitution work never reached");
+        return LawSolution::failed(Failure::Incoherent("restitution work never reached"));
     };
     let phases = path.phases_until(i_n);
     let end = phases.end();
