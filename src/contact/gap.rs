@@ -1,9 +1,10 @@
 //! The signed gap of a contact pair.
 
 use parry2d_f64::query;
+use parry2d_f64::shape::{Shape, SupportMap};
 
 use crate::kinematics::{KinematicsError, collider_pose};
-use crate::math::Real;
+use crate::math::{Pose, Real, Vec2};
 use crate::model::{Model, PairId};
 use crate::state::Data;
 
@@ -35,21 +36,35 @@ pub enum ContactError {
     Kinematics(#[from] KinematicsError),
 }
 
-/// The signed gap `g` (m) of the contact pair `pair` at the poses in `data`: the distance
-/// between the two shapes when apart, minus the penetration depth when they overlap.
-/// Returns `Ok(None)` if the shapes are farther apart than `prediction` (m); pass
-/// `Real::INFINITY` to always get the value.
+/// The closest features of a contact pair: witness points, normal and signed gap, in the
+/// world frame, oriented from the pair's collider `a` towards `b`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PairContact {
+    /// Signed gap `g` (m): the distance when apart, minus the penetration depth when
+    /// overlapping.
+    pub gap: Real,
+    /// Witness point on the shape of `a` (m, world frame).
+    pub point_a: Vec2,
+    /// Witness point on the shape of `b` (m, world frame).
+    pub point_b: Vec2,
+    /// Unit normal from `a` towards `b` (world frame): `b` approaches `a` when the relative
+    /// velocity `v_b − v_a` has a negative component along it.
+    pub normal: Vec2,
+}
+
+/// The closest features of the contact pair `pair` at the poses in `data`, or `Ok(None)` if
+/// the shapes are farther apart than `prediction` (m; pass `Real::INFINITY` to always get
+/// them).
 ///
-/// `g = parry2d::query::contact(X_a, shape_a, X_b, shape_b, prediction).dist`
-/// (`query::distance` is unsigned and cannot tell touching from overlapping).
-///
-/// Requires [`crate::kinematics::update_positions`].
-pub fn signed_gap(
+/// `parry2d::query::contact(X_a, shape_a, X_b, shape_b, prediction)` (`query::distance` is
+/// unsigned and cannot tell touching from overlapping). Requires
+/// [`crate::kinematics::update_positions`].
+pub fn pair_contact(
     model: &Model,
     data: &Data,
     pair: PairId,
     prediction: Real,
-) -> Result<Option<Real>, ContactError> {
+) -> Result<Option<PairContact>, ContactError> {
     let p = model
         .pair(pair)
         .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
@@ -62,20 +77,88 @@ pub fn signed_gap(
     // WORKAROUND (parry2d-f64 0.31.1): `query::contact(shape, half-space)` passes the pose
     // of the half-space relative to the shape where the pose of the shape relative to the
     // half-space is expected (`contact_support_map_halfspace` forgets `pos12.inverse()`),
-    // so the distance is wrong; `query::contact(half-space, shape)` is right. The distance
-    // is symmetric, so query with the half-space first.
-    let result = if cb.shape.as_halfspace().is_some() {
+    // so the distance is wrong; `query::contact(half-space, shape)` is right. Query with
+    // the half-space first and swap the result back.
+    let swapped = cb.shape.as_halfspace().is_some();
+    let result = if swapped {
         query::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction)
     } else {
         query::contact(&pose_a, &*ca.shape.0, &pose_b, &*cb.shape.0, prediction)
     };
     match result {
-        Ok(contact) => Ok(contact.map(|c| c.dist)),
+        Ok(None) => Ok(None),
+        Ok(Some(c)) if swapped => Ok(Some(PairContact {
+            gap: c.dist,
+            point_a: c.point2,
+            point_b: c.point1,
+            normal: -c.normal1,
+        })),
+        Ok(Some(c)) => {
+            let mut contact = PairContact {
+                gap: c.dist,
+                point_a: c.point1,
+                point_b: c.point2,
+                normal: c.normal1,
+            };
+            if let (Some(sa), Some(sb)) = (ca.shape.as_support_map(), cb.shape.as_support_map()) {
+                refine_witnesses(
+                    &mut contact,
+                    (&pose_a, sa, &*ca.shape.0),
+                    (&pose_b, sb, &*cb.shape.0),
+                );
+            }
+            Ok(Some(contact))
+        }
         Err(_) => Err(ContactError::Unsupported {
             a: ca.name.clone(),
             b: cb.name.clone(),
             shape_a: format!("{:?}", ca.shape.shape_type()),
             shape_b: format!("{:?}", cb.shape.shape_type()),
         }),
+    }
+}
+
+/// The signed gap `g` (m) of the contact pair `pair` at the poses in `data`: the distance
+/// between the two shapes when apart, minus the penetration depth when they overlap.
+/// Returns `Ok(None)` if the shapes are farther apart than `prediction` (m); pass
+/// `Real::INFINITY` to always get the value. See [`pair_contact`].
+///
+/// Requires [`crate::kinematics::update_positions`].
+pub fn signed_gap(
+    model: &Model,
+    data: &Data,
+    pair: PairId,
+    prediction: Real,
+) -> Result<Option<Real>, ContactError> {
+    Ok(pair_contact(model, data, pair, prediction)?.map(|c| c.gap))
+}
+
+/// Replaces the witness points of two support-mapped shapes by a contact point that lies on
+/// both surfaces (up to the gap), keeping parry's gap and normal.
+///
+/// GJK returns an exact distance, but when the closest features are two nearly parallel
+/// edges (capsules side by side, a rod landing almost flat) every pair of points along the
+/// overlap is nearly as close, and the witness points it stops at can lie anywhere along
+/// it: the contact velocity would then be taken at the wrong material points. The support
+/// points `s_a` of `a` along `n` and `s_b` of `b` along `−n` are the extreme points of each
+/// shape towards the other: unique for a vertex, and the first end to touch for nearly
+/// parallel edges. The one that lies on the other shape (its distance to it is the gap,
+/// the smaller of the two) is the contact point; the other witness is `gap · n` away.
+fn refine_witnesses(
+    c: &mut PairContact,
+    (pose_a, sup_a, shape_a): (&Pose, &dyn SupportMap, &dyn Shape),
+    (pose_b, sup_b, shape_b): (&Pose, &dyn SupportMap, &dyn Shape),
+) {
+    let n = c.normal;
+    let s_a = sup_a.support_point(pose_a, n);
+    let s_b = sup_b.support_point(pose_b, -n);
+    let d_a = shape_b.distance_to_point(pose_b, s_a, true);
+    let d_b = shape_a.distance_to_point(pose_a, s_b, true);
+    if d_a <= d_b {
+        c.point_a = s_a;
+        c.point_b = s_a + c.gap * n;
+    } else {
+        c.point_b = s_b;
+        c.point_a = s_b - c.gap * n;
     }
 }

@@ -1,10 +1,15 @@
-//! Contact geometry through parry2d: for now the signed gap of a contact pair at the current
-//! poses (used to validate scenes and, later, as the event function of an impact).
+//! Contact geometry through parry2d: the signed gap of a contact pair (the event function
+//! of an impact), and the contact frame with the Jacobians of the relative velocity (the
+//! input of the impact map).
 //!
 //! Sign convention: the gap `g` is positive when the shapes are apart, zero when they
-//! touch and negative (minus the penetration depth) when they overlap; parry's contact
-//! normal points from the pair's collider `a` towards `b`.
+//! touch and negative (minus the penetration depth) when they overlap. parry's normal
+//! ([`PairContact::normal`]) points from the pair's collider `a` towards `b`; the impact
+//! frame ([`ContactFrame::n`]) points the other way, from `b` towards `a`, so that the
+//! impulse it reports acts on `a` (always a body).
 
+mod frame;
 mod gap;
 
-pub use gap::{ContactError, signed_gap};
+pub use frame::{ContactFrame, FrameWorkspace, contact_frame};
+pub use gap::{ContactError, PairContact, pair_contact, signed_gap};

@@ -21,7 +21,8 @@
 //!
 //! - [`LogWriter`] writes a log (see its docs for finishing and interruption);
 //! - [`read`] reads one back, as far as it goes;
-//! - [`draw`] turns parry2d shapes and impacts into Foxglove scene entities.
+//! - [`draw`] turns parry2d shapes and impacts into Foxglove scene entities;
+//! - [`RunLogger`] is the simulation's observer that writes a run.
 
 use std::path::PathBuf;
 
@@ -29,6 +30,7 @@ pub mod draw;
 pub mod foxglove;
 mod reader;
 mod records;
+mod run;
 pub mod schemas;
 mod writer;
 
@@ -39,6 +41,7 @@ pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
 pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, Planar, StateRecord,
 };
+pub use run::RunLogger;
 pub use schemas::Topic;
 pub use writer::{Compression, LogOptions, LogWriter};
 

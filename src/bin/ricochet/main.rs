@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod check;
 mod impact;
 mod inspect;
+mod run;
 
 /// Planar multibody simulator with event-driven rigid impacts.
 #[derive(Parser)]
@@ -22,6 +23,8 @@ enum Command {
     Impact(impact::Args),
     /// Validate a scene and print its coordinates, initial state, mass matrix and energies as JSON.
     Check(check::Args),
+    /// Simulate a scene, write its MCAP log, print the impacts and the energy audit.
+    Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
 }
@@ -31,6 +34,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Impact(args) => impact::run(args),
         Command::Check(args) => check::run(args),
+        Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
     };
     match result {

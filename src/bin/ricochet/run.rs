@@ -1,0 +1,355 @@
+//! `ricochet run SCENE [-o OUT.mcap]`: simulates a scene, writes its MCAP log, prints the
+//! impact table and the energy audit.
+
+use std::io::{IsTerminal, Seek, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use anyhow::{Context, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use ricochet::impact::Law;
+use ricochet::integrate::Method;
+use ricochet::log::{LogOptions, LogWriter, RunLogger};
+use ricochet::math::Real;
+use ricochet::model::Model;
+use ricochet::sim::{
+    ImpactEvent, Level, MaterialOverride, Observer, ObserverError, RunSummary, Sample, Simulation,
+    StopReason,
+};
+
+/// Options of `ricochet run`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// The MCAP log to write (default: the scene's name with `.mcap`, in the current
+    /// folder).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// End time (s), instead of the scene's.
+    #[arg(long)]
+    t_end: Option<Real>,
+    /// Impact law for every contact: newton, kane-levinson, poisson, stronge.
+    #[arg(long)]
+    law: Option<Law>,
+    /// Coefficient of restitution for every contact, in [0, 1].
+    #[arg(long)]
+    e: Option<Real>,
+    /// Coefficient of friction for every contact, ≥ 0.
+    #[arg(long)]
+    mu: Option<Real>,
+    /// Integration method: dopri5, rk4.
+    #[arg(long)]
+    method: Option<Method>,
+    /// Relative tolerance of DOPRI5.
+    #[arg(long)]
+    rtol: Option<Real>,
+    /// Absolute tolerance of DOPRI5.
+    #[arg(long)]
+    atol: Option<Real>,
+    /// Step of RK4 (s).
+    #[arg(long)]
+    dt: Option<Real>,
+    /// Print only the summary line, not the impact table and the audit.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// One row of the impact table.
+struct Row {
+    t: Real,
+    pair: String,
+    law: Law,
+    kind: &'static str,
+    case: u8,
+    alpha: Real,
+    i_n: Real,
+    i_t: Real,
+    v_s: (Real, Real),
+    delta_e: Real,
+}
+
+/// The observer of the command: the log, a progress bar, the impact table.
+struct Terminal<W: Write + Seek> {
+    log: RunLogger<W>,
+    progress: Option<ProgressBar>,
+    t_end: Real,
+    rows: Vec<Row>,
+}
+
+impl<W: Write + Seek> Observer for Terminal<W> {
+    fn sample(&mut self, model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
+        if let Some(bar) = &self.progress {
+            bar.set_position((1000.0 * s.t / self.t_end) as u64);
+        }
+        self.log.sample(model, s)
+    }
+
+    fn impact(&mut self, model: &Model, ev: &ImpactEvent) -> Result<(), ObserverError> {
+        let pair = &model.pairs()[ev.frame.pair.index()];
+        let name = |c: ricochet::model::ColliderId| model.colliders()[c.index()].name.clone();
+        self.rows.push(Row {
+            t: ev.t,
+            pair: format!("{}/{}", name(pair.a), name(pair.b)),
+            law: ev.outcome.law,
+            kind: ev.outcome.kind.name(),
+            case: ev.outcome.case.number(),
+            alpha: ev.outcome.coefficients.alpha(),
+            i_n: ev.outcome.impulse.n,
+            i_t: ev.outcome.impulse.t,
+            v_s: (ev.outcome.v_s.n, ev.outcome.v_s.t),
+            delta_e: ev.outcome.delta_e,
+        });
+        self.log.impact(model, ev)
+    }
+
+    fn message(&mut self, t: Real, level: Level, text: &str) -> Result<(), ObserverError> {
+        // The stop is reported at the end; other warnings as they come.
+        if level != Level::Info && !text.starts_with("run stopped") {
+            let line = format!("t = {t:.6} s: {text}");
+            match &self.progress {
+                Some(bar) => bar.println(line),
+                None => eprintln!("{line}"),
+            }
+        }
+        self.log.message(t, level, text)
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let mut scene = ricochet::scene::load(&args.scene)?;
+    // Overrides of the scene's settings.
+    let s = &mut scene.settings;
+    if let Some(t) = args.t_end {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--t-end must be a positive number of seconds, not {t}");
+        }
+        s.t_end = t;
+    }
+    if let Some(m) = args.method {
+        s.integrator.method = m;
+    }
+    for (name, value, field) in [
+        ("--rtol", args.rtol, &mut s.integrator.rtol),
+        ("--atol", args.atol, &mut s.integrator.atol),
+        ("--dt", args.dt, &mut s.integrator.dt),
+    ] {
+        if let Some(v) = value {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{name} must be a positive number, not {v}");
+            }
+            *field = v;
+        }
+    }
+    if let Some(e) = args.e
+        && !(0.0..=1.0).contains(&e)
+    {
+        bail!("--e must lie in [0, 1], not {e}");
+    }
+    if let Some(mu) = args.mu
+        && !(mu >= 0.0 && mu.is_finite())
+    {
+        bail!("--mu must be a non-negative number, not {mu}");
+    }
+    let overrides = MaterialOverride {
+        law: args.law,
+        e: args.e,
+        mu: args.mu,
+    };
+    let output = args
+        .output
+        .unwrap_or_else(|| PathBuf::from(format!("{}.mcap", scene.name)));
+
+    let mut sim = Simulation::new(&scene.model, &scene.settings, overrides)
+        .with_context(|| format!("{}: cannot simulate", args.scene.display()))?;
+    let writer = LogWriter::create(&output, LogOptions::default())
+        .with_context(|| format!("cannot create the log {}", output.display()))?;
+    let log = RunLogger::new(
+        writer,
+        &scene.model,
+        (&scene.name, &scene.text),
+        &scene.settings,
+        scene.initial.t,
+        sim.scales().gap_tol,
+    )?;
+    let progress = std::io::stderr().is_terminal().then(|| {
+        let bar = ProgressBar::new(1000);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{bar:40}] {percent:>3}% of simulated time, {elapsed}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let mut terminal = Terminal {
+        log,
+        progress,
+        t_end: scene.settings.t_end,
+        rows: Vec::new(),
+    };
+
+    let interrupt = Arc::new(AtomicBool::new(false));
+    install_interrupt(&interrupt)?;
+    let summary = sim.run(&scene.initial, &mut terminal, Some(&interrupt));
+    if let Some(bar) = &terminal.progress {
+        bar.finish_and_clear();
+    }
+    let rows = std::mem::take(&mut terminal.rows);
+    terminal
+        .log
+        .finish(&summary)
+        .with_context(|| format!("cannot finish the log {}", output.display()))?;
+
+    report(&scene.name, &output, &summary, &rows, args.quiet)?;
+    Ok(match summary.stop {
+        StopReason::EndTime | StopReason::Accumulation { .. } => ExitCode::SUCCESS,
+        StopReason::Interrupted { .. } => ExitCode::from(130),
+        StopReason::Failed(_) => ExitCode::FAILURE,
+    })
+}
+
+/// On a first Ctrl-C the run stops at the next step and finishes its log; a second one
+/// terminates the process at once.
+fn install_interrupt(flag: &Arc<AtomicBool>) -> anyhow::Result<()> {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::SIGINT;
+        use signal_hook::flag;
+        flag::register_conditional_shutdown(SIGINT, 130, Arc::clone(flag))
+            .context("cannot install the Ctrl-C handler")?;
+        flag::register(SIGINT, Arc::clone(flag)).context("cannot install the Ctrl-C handler")?;
+    }
+    #[cfg(not(unix))]
+    let _ = flag;
+    Ok(())
+}
+
+/// The longest impact table printed in full; longer ones show their head and tail.
+const TABLE_ROWS: usize = 40;
+
+fn report(
+    name: &str,
+    output: &std::path::Path,
+    summary: &RunSummary,
+    rows: &[Row],
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    let c = &summary.counters;
+    writeln!(
+        out,
+        "{name}: stopped at t = {:.6} s, {}\n{} impacts, {} steps ({} rejected), {} rhs evaluations",
+        summary.state.t, summary.stop, c.impacts, c.steps, c.rejected, c.rhs_evals
+    )?;
+    if !quiet {
+        if !rows.is_empty() {
+            writeln!(out)?;
+            writeln!(
+                out,
+                "{:>5} {:>12} {:<16} {:<13} {:<15} {:>4} {:>9} {:>11} {:>11} {:>11} {:>11} {:>11}",
+                "#",
+                "t [s]",
+                "pair",
+                "law",
+                "type",
+                "case",
+                "alpha",
+                "I_n [Ns]",
+                "I_t [Ns]",
+                "v_n^S [m/s]",
+                "v_t^S [m/s]",
+                "dE [J]"
+            )?;
+            for (k, r) in rows.iter().enumerate() {
+                if rows.len() > TABLE_ROWS && k == TABLE_ROWS / 2 {
+                    writeln!(
+                        out,
+                        "{:>5} … {} more impacts …",
+                        "",
+                        rows.len() - TABLE_ROWS
+                    )?;
+                }
+                if rows.len() > TABLE_ROWS && k >= TABLE_ROWS / 2 && k < rows.len() - TABLE_ROWS / 2
+                {
+                    continue;
+                }
+                writeln!(
+                    out,
+                    "{:>5} {:>12.6} {:<16} {:<13} {:<15} {:>4} {:>9.4} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e}",
+                    k,
+                    r.t,
+                    r.pair,
+                    r.law.name(),
+                    r.kind,
+                    r.case,
+                    r.alpha,
+                    r.i_n,
+                    r.i_t,
+                    r.v_s.0,
+                    r.v_s.1,
+                    r.delta_e
+                )?;
+            }
+        }
+        let a = &summary.audit;
+        let scale = a
+            .initial
+            .total()
+            .abs()
+            .max(a.end.total().abs())
+            .max(Real::MIN_POSITIVE);
+        writeln!(out)?;
+        writeln!(out, "energy audit [J]")?;
+        writeln!(
+            out,
+            "  E_0                          {:>16.9e}",
+            a.initial.total()
+        )?;
+        writeln!(
+            out,
+            "  E_end                        {:>16.9e}",
+            a.end.total()
+        )?;
+        writeln!(
+            out,
+            "  E_end − E_0                  {:>16.9e}",
+            a.end.total() - a.initial.total()
+        )?;
+        writeln!(
+            out,
+            "  impacts, Eq. (29)            {:>16.9e}",
+            a.impact_delta_e
+        )?;
+        writeln!(
+            out,
+            "  prescribed motion at impacts {:>16.9e}   (Eq. 28)",
+            a.impact_prescribed_work
+        )?;
+        writeln!(
+            out,
+            "  prescribed drives            {:>16.9e}",
+            a.drive_work
+        )?;
+        writeln!(
+            out,
+            "  dampers                      {:>16.9e}",
+            a.damping_work
+        )?;
+        writeln!(
+            out,
+            "  applied efforts              {:>16.9e}",
+            a.applied_work
+        )?;
+        writeln!(
+            out,
+            "  integration drift            {:>16.9e}   ({:.1e} relative)",
+            a.drift(),
+            a.drift().abs() / scale
+        )?;
+    }
+    writeln!(out, "log: {}", output.display())?;
+    Ok(())
+}

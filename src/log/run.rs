@@ -1,0 +1,257 @@
+//! The log of a simulation run: the [`Observer`] that writes a run's samples, impacts and
+//! messages to an MCAP file, with the scene drawn for Foxglove's 3D panel.
+
+use std::io::{Seek, Write};
+
+use serde::Serialize;
+
+use super::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
+use super::foxglove::Color;
+use super::{
+    Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, LogError, LogLevel,
+    LogWriter, Planar, SceneUpdate, StateRecord,
+};
+use crate::math::{Real, Vec2};
+use crate::model::Model;
+use crate::sim::{ImpactEvent, Level, Observer, ObserverError, RunSummary, Sample, StopReason};
+
+/// Colours of the bodies, in body order (cycled).
+const PALETTE: [(f64, f64, f64); 6] = [
+    (0.27, 0.51, 0.71),
+    (0.87, 0.56, 0.20),
+    (0.35, 0.65, 0.35),
+    (0.75, 0.30, 0.35),
+    (0.55, 0.45, 0.70),
+    (0.55, 0.40, 0.30),
+];
+
+/// Colour of the obstacles.
+const OBSTACLE: (f64, f64, f64) = (0.6, 0.6, 0.6);
+
+/// Writes a run to an MCAP log as it goes: `/state` and `/tf` at each sample, `/impacts`
+/// and an impulse arrow on `/scene` at each impact, `/log` for messages; the scene text,
+/// the settings and, at the end, the energy audit as metadata.
+pub struct RunLogger<W: Write + Seek> {
+    writer: LogWriter<W>,
+    /// Pair names `<collider a>/<collider b>`, in pair order.
+    pairs: Vec<String>,
+    /// Body names of each pair's two sides (`world` for an obstacle).
+    sides: Vec<(String, String)>,
+    /// Body names, in body order.
+    bodies: Vec<String>,
+    /// A contact is drawn as closed when its gap is at most this (m).
+    gap_tol: Real,
+    impacts: u64,
+    arrow: ArrowStyle,
+}
+
+impl<W: Write + Seek> RunLogger<W> {
+    /// Starts the log of a run of `model`: writes the scene (`name`, file `text`), the
+    /// `settings`, and the bodies and obstacles on `/scene` at `t0`.
+    pub fn new<S: Serialize>(
+        mut writer: LogWriter<W>,
+        model: &Model,
+        (name, text): (&str, &str),
+        settings: &S,
+        t0: Real,
+        gap_tol: Real,
+    ) -> Result<Self, LogError> {
+        writer.scene(name, text)?;
+        writer.settings(settings)?;
+        let bodies: Vec<String> = model.bodies().iter().map(|b| b.name.clone()).collect();
+        let side = |c: crate::model::ColliderId| -> String {
+            model.colliders()[c.index()]
+                .body
+                .map_or_else(|| "world".to_owned(), |b| bodies[b.index()].clone())
+        };
+        let pairs = model
+            .pairs()
+            .iter()
+            .map(|p| {
+                let (a, b) = (
+                    &model.colliders()[p.a.index()],
+                    &model.colliders()[p.b.index()],
+                );
+                format!("{}/{}", a.name, b.name)
+            })
+            .collect();
+        let sides = model
+            .pairs()
+            .iter()
+            .map(|p| (side(p.a), side(p.b)))
+            .collect();
+        writer.scene_update(t0, &scene_entities(model, &bodies, t0)?)?;
+        Ok(Self {
+            writer,
+            pairs,
+            sides,
+            bodies,
+            gap_tol,
+            impacts: 0,
+            arrow: ArrowStyle::default(),
+        })
+    }
+
+    /// Ends the log: writes the energy audit of `summary` and finishes the file.
+    pub fn finish(mut self, summary: &RunSummary) -> Result<W, LogError> {
+        let a = &summary.audit;
+        let c = &summary.counters;
+        let stop = match &summary.stop {
+            StopReason::Failed(e) => format!("error: {e}"),
+            other => format!("{}: {other}", other.name()),
+        };
+        let audit = Audit::new(
+            stop,
+            summary.state.t,
+            (a.initial.total(), a.end.total()),
+            (
+                a.impact_delta_e,
+                a.damping_work + a.applied_work,
+                a.impact_prescribed_work + a.drive_work,
+            ),
+            Counters {
+                impacts: c.impacts,
+                steps: c.steps,
+                rejected_steps: c.rejected,
+                rhs_evaluations: c.rhs_evals,
+                events: c.events,
+                state_samples: c.samples,
+            },
+        );
+        self.writer.audit(&audit)?;
+        self.writer.finish()
+    }
+
+    /// Flushes what is written so far (the log stays readable if the process dies).
+    pub fn flush(&mut self) -> Result<(), LogError> {
+        self.writer.flush()
+    }
+}
+
+/// The bodies (frame-locked to their frames) and the obstacles (in `world`).
+fn scene_entities(model: &Model, bodies: &[String], t: Real) -> Result<SceneUpdate, LogError> {
+    let style = DrawStyle::default();
+    let mut entities = Vec::new();
+    for (k, name) in bodies.iter().enumerate() {
+        let (r, g, b) = PALETTE[k % PALETTE.len()];
+        let shapes: Vec<ShapeDrawing<'_>> = model
+            .colliders()
+            .iter()
+            .filter(|c| c.body.is_some_and(|b| b.index() == k))
+            .map(|c| ShapeDrawing {
+                shape: &*c.shape.0,
+                pose: c.pose,
+                color: Color::rgba(r, g, b, 1.0),
+            })
+            .collect();
+        entities.push(draw::body_entity(t, name, &shapes, &style)?);
+    }
+    for c in model.colliders().iter().filter(|c| c.body.is_none()) {
+        let (r, g, b) = OBSTACLE;
+        let shape = ShapeDrawing {
+            shape: &*c.shape.0,
+            pose: c.pose,
+            color: Color::rgba(r, g, b, 1.0),
+        };
+        entities.push(draw::obstacle_entity(t, &c.name, &[shape], &style)?);
+    }
+    Ok(SceneUpdate {
+        deletions: vec![],
+        entities,
+    })
+}
+
+fn planar(v: Vec2) -> Planar {
+    Planar { x: v.x, y: v.y }
+}
+
+impl<W: Write + Seek> Observer for RunLogger<W> {
+    fn sample(&mut self, _model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
+        let contacts = (self.pairs.iter().zip(s.gaps))
+            .map(|(name, &gap)| {
+                let mode = if s.at_impact && gap <= self.gap_tol {
+                    ContactMode::Impact
+                } else {
+                    ContactMode::Free
+                };
+                ContactState::new(name.clone(), mode, gap)
+            })
+            .collect();
+        let energy = Energy::new(s.energy.kinetic, s.energy.potential);
+        let record = StateRecord::new(
+            s.t,
+            s.q.to_vec(),
+            s.u.to_vec(),
+            energy,
+            contacts,
+            self.impacts,
+        );
+        self.writer.state(&record)?;
+        let poses = self
+            .bodies
+            .iter()
+            .map(String::as_str)
+            .zip(s.poses.iter().copied());
+        self.writer
+            .transforms(s.t, &draw::body_transforms(s.t, poses)?)?;
+        Ok(())
+    }
+
+    fn impact(&mut self, _model: &Model, ev: &ImpactEvent) -> Result<(), ObserverError> {
+        let k = ev.frame.pair.index();
+        let (out, c) = (&ev.outcome, &ev.outcome.coefficients);
+        let record = ImpactRecord {
+            t: ev.t,
+            pair: self.pairs[k].clone(),
+            body_a: self.sides[k].0.clone(),
+            body_b: self.sides[k].1.clone(),
+            law: out.law,
+            impact_type: out.kind,
+            case: out.case.number(),
+            alpha: c.alpha(),
+            w: ev.w,
+            g: c.g,
+            h: c.h,
+            p: c.p,
+            q: c.q,
+            v_a: ev.v_a,
+            v_s: out.v_s,
+            i_n: out.impulse.n,
+            i_t: out.impulse.t,
+            delta_u: ev.delta_u.clone(),
+            energy_before: ev.energy_before.total(),
+            energy_after: ev.energy_after.total(),
+            delta_e: out.delta_e,
+            work_n: out.work_n,
+            work_t: out.work_t,
+            index: ev.index,
+            e: ev.material.e,
+            mu: ev.material.mu,
+            prescribed_work: ev.prescribed_work(),
+            point: planar(ev.frame.point()),
+            normal: planar(ev.frame.n),
+            tangent: planar(ev.frame.t),
+        };
+        self.writer.impact(&record)?;
+        let arrow = draw::impulse_arrow(&record, &self.arrow)?;
+        self.writer.scene_update(
+            ev.t,
+            &SceneUpdate {
+                deletions: vec![],
+                entities: vec![arrow],
+            },
+        )?;
+        self.impacts += 1;
+        Ok(())
+    }
+
+    fn message(&mut self, t: Real, level: Level, text: &str) -> Result<(), ObserverError> {
+        let level = match level {
+            Level::Info => LogLevel::Info,
+            Level::Warning => LogLevel::Warning,
+            Level::Error => LogLevel::Error,
+        };
+        self.writer.log(t, level, text)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,110 @@
+//! What a run reports while it goes: samples of the state at the output rate, the impact
+//! ledger, and messages. The MCAP log implements [`Observer`]; so can a test.
+
+use crate::dynamics::Energy;
+use crate::math::{Pose, Real};
+use crate::model::Model;
+
+use super::ImpactEvent;
+
+/// A sample of the run.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample<'a> {
+    /// Time (s).
+    pub t: Real,
+    /// Generalized coordinates `q` (m, rad).
+    pub q: &'a [Real],
+    /// Generalized speeds `u` (m/s, rad/s).
+    pub u: &'a [Real],
+    /// Energies (J).
+    pub energy: Energy,
+    /// Signed gap of every contact pair, in pair order (m).
+    pub gaps: &'a [Real],
+    /// World pose of every body, in body order.
+    pub poses: &'a [Pose],
+    /// `true` for the two samples taken at an impact instant (before and after the jump).
+    pub at_impact: bool,
+}
+
+/// The severity of a message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Level {
+    /// Information (a mode change, a stop).
+    Info,
+    /// Something the user should know (a simultaneous impact resolved sequentially).
+    Warning,
+    /// A failure that stops the run.
+    Error,
+}
+
+/// An error of an observer (an I/O error of the log, typically).
+pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Receives what a run reports. All methods run on the simulation's thread.
+pub trait Observer {
+    /// Whether to compute samples at the output rate (energies, gaps and poses cost a
+    /// kinematics pass each); `false` runs the simulation alone.
+    fn wants_samples(&self) -> bool {
+        true
+    }
+
+    /// A sample of the state.
+    fn sample(&mut self, model: &Model, sample: &Sample<'_>) -> Result<(), ObserverError>;
+
+    /// An impact (an entry of the ledger).
+    fn impact(&mut self, model: &Model, impact: &ImpactEvent) -> Result<(), ObserverError>;
+
+    /// A message at time `t` (s).
+    fn message(&mut self, t: Real, level: Level, text: &str) -> Result<(), ObserverError>;
+}
+
+/// An observer that keeps nothing: the simulation alone.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NullObserver;
+
+impl Observer for NullObserver {
+    fn wants_samples(&self) -> bool {
+        false
+    }
+    fn sample(&mut self, _: &Model, _: &Sample<'_>) -> Result<(), ObserverError> {
+        Ok(())
+    }
+    fn impact(&mut self, _: &Model, _: &ImpactEvent) -> Result<(), ObserverError> {
+        Ok(())
+    }
+    fn message(&mut self, _: Real, _: Level, _: &str) -> Result<(), ObserverError> {
+        Ok(())
+    }
+}
+
+/// An observer that keeps the impacts and messages in memory (for tests and scripts).
+#[derive(Clone, Debug, Default)]
+pub struct Recorder {
+    /// Every impact, in order.
+    pub impacts: Vec<ImpactEvent>,
+    /// Every message, with its time and level.
+    pub messages: Vec<(Real, Level, String)>,
+    /// Every sample's time, coordinates, speeds and total energy, if `samples` is set.
+    pub samples: Vec<(Real, Vec<Real>, Vec<Real>, Real)>,
+    /// Whether to keep samples.
+    pub keep_samples: bool,
+}
+
+impl Observer for Recorder {
+    fn wants_samples(&self) -> bool {
+        self.keep_samples
+    }
+    fn sample(&mut self, _: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
+        self.samples
+            .push((s.t, s.q.to_vec(), s.u.to_vec(), s.energy.total()));
+        Ok(())
+    }
+    fn impact(&mut self, _: &Model, impact: &ImpactEvent) -> Result<(), ObserverError> {
+        self.impacts.push(impact.clone());
+        Ok(())
+    }
+    fn message(&mut self, t: Real, level: Level, text: &str) -> Result<(), ObserverError> {
+        self.messages.push((t, level, text.to_owned()));
+        Ok(())
+    }
+}
