@@ -6,100 +6,11 @@
 //! length l = 2 m, absolute angles q1 = 20°, q2 = 30° from the downward vertical,
 //! u = (−0.1, −0.2) rad/s, the tip of rod B striking a horizontal floor.
 
-use nalgebra::{Matrix2, RowVector2, Vector2};
-use ricochet::impact::{self, ContactVelocity, ImpactMatrix, ImpactProblem, Law, kane_levinson};
-use serde::Deserialize;
+use nalgebra::Vector2;
 
-#[derive(Deserialize)]
-struct Golden {
-    source: String,
-    row: Vec<Row>,
-    exception: Vec<Exception>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Row {
-    law: String,
-    row: u32,
-    e: f64,
-    mu: f64,
-    r_m: String,
-    one_plus_e_r_m: String,
-    minus_one_plus_e_r_p: String,
-    #[serde(rename = "type")]
-    kind: Option<u8>,
-    delta_u: Option<[String; 2]>,
-    v_n_s: Option<String>,
-    v_t_s: Option<String>,
-    delta_e: Option<String>,
-}
-
-#[derive(Deserialize)]
-struct Exception {
-    law: String,
-    row: u32,
-    column: String,
-    reason: String,
-}
-
-/// A printed number and one unit in its last printed place.
-#[derive(Clone, Copy, Debug)]
-struct Printed {
-    value: f64,
-    unit: f64,
-}
-
-fn printed(s: &str) -> Printed {
-    let decimals = s.split('.').nth(1).map_or(0, str::len);
-    Printed {
-        value: s.parse().expect("a number"),
-        unit: 10f64.powi(-(decimals as i32)),
-    }
-}
-
-/// The double pendulum at the instant of impact, from its closed form.
-struct Pendulum {
-    /// Positive definite mass matrix, M = m l² [[4/3, ½ cos(q1−q2)], [½ cos(q1−q2), 1/3]]
-    /// (the negative of the paper's, whose equations of motion in Sect. 5 carry −⅓ m l²
-    /// times [[4, 3/2 cos], [3/2 cos, 1]]).
-    mass: Matrix2<f64>,
-    /// Rows J_n, J_t: tip velocity components along n = +y and t = −x.
-    jac: Matrix2<f64>,
-    /// Generalized speeds before the impact.
-    u: Vector2<f64>,
-}
-
-fn pendulum() -> Pendulum {
-    let (m, l) = (3.0, 2.0);
-    let (q1, q2) = (20f64.to_radians(), 30f64.to_radians());
-    let c12 = (q1 - q2).cos();
-    let mass = m * l * l * Matrix2::new(4.0 / 3.0, 0.5 * c12, 0.5 * c12, 1.0 / 3.0);
-    // Tip position l (sin q1 + sin q2, −cos q1 − cos q2): ∂y/∂q = l (sin q1, sin q2),
-    // ∂x/∂q = l (cos q1, cos q2); n = +y, t = −x (so that v_t^A ≥ 0).
-    let j_n = RowVector2::new(l * q1.sin(), l * q2.sin());
-    let j_t = -RowVector2::new(l * q1.cos(), l * q2.cos());
-    Pendulum {
-        mass,
-        jac: Matrix2::from_rows(&[j_n, j_t]),
-        u: Vector2::new(-0.1, -0.2),
-    }
-}
-
-impl Pendulum {
-    fn w(&self) -> ImpactMatrix {
-        let w = self.jac * self.mass.try_inverse().unwrap() * self.jac.transpose();
-        ImpactMatrix::new(w[(0, 0)], w[(0, 1)], w[(1, 1)])
-    }
-    fn v_a(&self) -> ContactVelocity {
-        let v = self.jac * self.u;
-        ContactVelocity::new(v[0], v[1])
-    }
-    /// Eq. (16) with the positive definite M: Δu = M⁻¹ (J_nᵀ I_n + J_tᵀ I_t).
-    fn delta_u(&self, i_n: f64, i_t: f64) -> Vector2<f64> {
-        self.mass.try_inverse().unwrap() * self.jac.transpose() * Vector2::new(i_n, i_t)
-    }
-}
+mod common;
+use common::{Golden, golden, pendulum, printed};
+use ricochet::impact::{self, ImpactProblem, Law, kane_levinson};
 
 fn law_of(name: &str) -> Law {
     name.parse().expect("a law name")
@@ -119,12 +30,7 @@ fn the_pendulum_matches_the_papers_data() {
 
 #[test]
 fn table_2_reproduces_to_the_printed_digits() {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/golden/paper_table_2.toml"
-    ))
-    .unwrap();
-    let golden: Golden = toml::from_str(&text).unwrap();
+    let golden: Golden = golden();
     let p = pendulum();
     let (w, v_a) = (p.w(), p.v_a());
     let mut failures = Vec::new();

@@ -31,6 +31,22 @@ pub enum ContactError {
         /// Second shape type.
         shape_b: String,
     },
+    /// parry2d found no contact of two overlapping shapes (its penetration algorithm gave
+    /// up), so the gap cannot be signed.
+    #[error(
+        "contact pair `{a}`–`{b}`: parry2d cannot compute the penetration of this {shape_a} \
+         and {shape_b} (they overlap)"
+    )]
+    PenetrationFailed {
+        /// First collider.
+        a: String,
+        /// Second collider.
+        b: String,
+        /// Its shape type.
+        shape_a: String,
+        /// Second shape type.
+        shape_b: String,
+    },
     /// A kinematics query failed.
     #[error(transparent)]
     Kinematics(#[from] KinematicsError),
@@ -79,26 +95,44 @@ pub fn pair_contact(
     // half-space is expected (`contact_support_map_halfspace` forgets `pos12.inverse()`),
     // so the distance is wrong; `query::contact(half-space, shape)` is right. Query with
     // the half-space first and swap the result back.
-    let swapped = cb.shape.as_halfspace().is_some();
-    let result = if swapped {
-        query::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction)
+    let halfspace_b = cb.shape.as_halfspace().is_some();
+    let query_ab = || query::contact(&pose_a, &*ca.shape.0, &pose_b, &*cb.shape.0, prediction);
+    let query_ba = || query::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction);
+    let (mut result, mut swapped) = if halfspace_b {
+        (query_ba(), true)
     } else {
-        query::contact(&pose_a, &*ca.shape.0, &pose_b, &*cb.shape.0, prediction)
+        (query_ab(), false)
     };
+    if matches!(result, Ok(None)) && prediction == Real::INFINITY {
+        // With an infinite prediction parry only returns no contact when its GJK–EPA
+        // gives up, which happens for thin polygons exactly touching or crossing (cf.
+        // dimforge/parry#415). The other order starts GJK elsewhere and usually succeeds;
+        // if not, apart shapes still have closest points.
+        if !halfspace_b {
+            result = query_ba();
+            swapped = true;
+        }
+        if matches!(result, Ok(None)) {
+            return closest_points_fallback(ca, cb, &pose_a, &pose_b);
+        }
+    }
     match result {
         Ok(None) => Ok(None),
-        Ok(Some(c)) if swapped => Ok(Some(PairContact {
-            gap: c.dist,
-            point_a: c.point2,
-            point_b: c.point1,
-            normal: -c.normal1,
-        })),
         Ok(Some(c)) => {
-            let mut contact = PairContact {
-                gap: c.dist,
-                point_a: c.point1,
-                point_b: c.point2,
-                normal: c.normal1,
+            let mut contact = if swapped {
+                PairContact {
+                    gap: c.dist,
+                    point_a: c.point2,
+                    point_b: c.point1,
+                    normal: -c.normal1,
+                }
+            } else {
+                PairContact {
+                    gap: c.dist,
+                    point_a: c.point1,
+                    point_b: c.point2,
+                    normal: c.normal1,
+                }
             };
             if let (Some(sa), Some(sb)) = (ca.shape.as_support_map(), cb.shape.as_support_map()) {
                 refine_witnesses(
@@ -161,4 +195,52 @@ fn refine_witnesses(
         c.point_b = s_b;
         c.point_a = s_b - c.gap * n;
     }
+}
+
+/// The contact of two shapes when `query::contact` gave up: from their closest points when
+/// they are apart, from their support functions when they overlap (both convex), else a
+/// typed error.
+fn closest_points_fallback(
+    ca: &crate::model::Collider,
+    cb: &crate::model::Collider,
+    pose_a: &Pose,
+    pose_b: &Pose,
+) -> Result<Option<PairContact>, ContactError> {
+    let unsupported = |_| ContactError::Unsupported {
+        a: ca.name.clone(),
+        b: cb.name.clone(),
+        shape_a: format!("{:?}", ca.shape.shape_type()),
+        shape_b: format!("{:?}", cb.shape.shape_type()),
+    };
+    let cp = query::closest_points(pose_a, &*ca.shape.0, pose_b, &*cb.shape.0, Real::MAX)
+        .map_err(unsupported)?;
+    match cp {
+        query::ClosestPoints::WithinMargin(pa, pb) => {
+            let (normal, gap) = (pb - pa).normalize_and_length();
+            if gap > 0.0 && normal.is_finite() {
+                return Ok(Some(PairContact {
+                    gap,
+                    point_a: pa,
+                    point_b: pb,
+                    normal,
+                }));
+            }
+        }
+        query::ClosestPoints::Intersecting => {
+            if let (Some(sa), Some(sb)) = (ca.shape.as_support_map(), cb.shape.as_support_map()) {
+                let mut normals = Vec::new();
+                super::penetration::face_normals(&*ca.shape.0, pose_a, &mut normals);
+                super::penetration::face_normals(&*cb.shape.0, pose_b, &mut normals);
+                let c = super::penetration::penetration(pose_a, sa, pose_b, sb, &normals);
+                return Ok(Some(c));
+            }
+        }
+        query::ClosestPoints::Disjoint => {}
+    }
+    Err(ContactError::PenetrationFailed {
+        a: ca.name.clone(),
+        b: cb.name.clone(),
+        shape_a: format!("{:?}", ca.shape.shape_type()),
+        shape_b: format!("{:?}", cb.shape.shape_type()),
+    })
 }

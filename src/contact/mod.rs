@@ -10,6 +10,7 @@
 
 mod frame;
 mod gap;
+mod penetration;
 
 pub use frame::{ContactFrame, FrameWorkspace, contact_frame};
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
