@@ -55,6 +55,8 @@ pub enum StopReason {
         t: Real,
         /// The contact pair.
         pair: usize,
+        /// Its name, `<collider a>/<collider b>`.
+        name: String,
         /// What was seen.
         reason: String,
     },
@@ -83,11 +85,8 @@ impl std::fmt::Display for StopReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             StopReason::EndTime => f.write_str("reached the end time"),
-            StopReason::Accumulation { pair, reason, .. } => {
-                write!(
-                    f,
-                    "accumulation of impacts on contact pair #{pair}: {reason}"
-                )
+            StopReason::Accumulation { name, reason, .. } => {
+                write!(f, "accumulation of impacts on {name}: {reason}")
             }
             StopReason::Interrupted { .. } => f.write_str("interrupted"),
             StopReason::Failed(e) => write!(f, "failed: {e}"),
@@ -646,9 +645,12 @@ impl<'m> Simulation<'m> {
 
     /// A stop for an accumulation (the final message goes to the log in [`Self::finish`]).
     fn accumulation(&mut self, t: Real, pair: PairId, reason: String) -> StopReason {
+        let p = &self.model.pairs()[pair.index()];
+        let name = |c: crate::model::ColliderId| &self.model.colliders()[c.index()].name;
         StopReason::Accumulation {
             t,
             pair: pair.index(),
+            name: format!("{}/{}", name(p.a), name(p.b)),
             reason,
         }
     }
