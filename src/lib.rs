@@ -64,6 +64,7 @@ pub mod events;
 pub mod impact;
 pub mod integrate;
 pub mod kinematics;
+pub mod lcp;
 pub mod log;
 pub mod math;
 pub mod model;

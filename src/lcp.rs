@@ -1,0 +1,254 @@
+//! The complementarity problem of several contacts with Coulomb friction, solved exactly by
+//! enumerating the contact modes. Pure numerics on `(A, b, μ)`: nothing here knows about
+//! bodies.
+//!
+//! For `n` contacts, with unknown forces (or impulses) `x = (x_n0, x_t0, x_n1, x_t1, …)` and
+//! `w = A x + b` the resulting normal and tangential accelerations (or velocities), each
+//! contact is in one of the modes
+//!
+//! | mode | equations | conditions |
+//! |---|---|---|
+//! | open | `x_n = 0`, `x_t = 0` | `w_n ≥ 0` |
+//! | stick | `w_n = 0`, `w_t = 0` | `x_n ≥ 0`, `|x_t| ≤ μ x_n` |
+//! | slide `s` | `w_n = 0`, `x_t = −μ s x_n` | `x_n ≥ 0`, and `s w_t ≥ 0` when the slip starts |
+//!
+//! This is Coulomb's law with unilateral contact at the acceleration level (persistent
+//! contacts: `w` is the relative acceleration, the slip direction `s` of a sliding contact
+//! is known from its velocity) or at the velocity level (Moreau's generalized Newton law
+//! for simultaneous impacts: `w = v⁺ + e v⁻`, the slip is that of `v⁺`). Enumerating the
+//! `≤ 4ⁿ` mode combinations finds every solution: none or several reveal Painlevé's
+//! paradox (inconsistency or indeterminacy). Each combination is a linear system solved
+//! by SVD (least squares), so rank-deficient `A` (one degree of freedom) is handled; a
+//! combination counts only if its residual vanishes.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::math::Real;
+
+/// The mode of one contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// The contact opens: no force.
+    Open,
+    /// The contact is closed and does not slip.
+    Stick,
+    /// The contact is closed and slips in the direction `s = ±1` along its tangent; the
+    /// friction is `x_t = −μ s x_n`.
+    Slide(Real),
+}
+
+/// Which modes a contact may take.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Allowed {
+    /// Coulomb's coefficient `μ ≥ 0`.
+    pub mu: Real,
+    /// The contact may open.
+    pub open: bool,
+    /// The known slip direction (`Some(±1)`: the contact slides, it cannot stick); `None`:
+    /// it may stick, or start to slip either way (then `s w_t ≥ 0` is required).
+    pub slip: Option<Real>,
+}
+
+/// A solution: the mode, force and resulting `w` of every contact.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    /// Mode of each contact.
+    pub modes: Vec<Mode>,
+    /// Forces `x` (2n): normal and tangential of each contact.
+    pub x: DVector<Real>,
+    /// `w = A x + b` (2n).
+    pub w: DVector<Real>,
+}
+
+/// Every solution of the problem (none, one, or several).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solutions {
+    /// The solutions, in the order the modes were enumerated (for each contact: open,
+    /// stick, slide +1, slide −1).
+    pub all: Vec<Solution>,
+}
+
+/// Relative tolerance of the residuals and sign conditions.
+const TOL: Real = 1e-9;
+
+/// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
+/// `A` is `2n × 2n`, `b` has `2n` entries, `allowed` has `n`. Intended for a few contacts
+/// (it tries up to `4ⁿ` linear systems); returns every consistent combination.
+pub fn solve(a: &DMatrix<Real>, b: &DVector<Real>, allowed: &[Allowed]) -> Solutions {
+    let n = allowed.len();
+    debug_assert_eq!(a.nrows(), 2 * n);
+    let options: Vec<Vec<Mode>> = allowed
+        .iter()
+        .map(|c| {
+            let mut m = Vec::with_capacity(4);
+            if c.open {
+                m.push(Mode::Open);
+            }
+            match c.slip {
+                Some(s) => m.push(Mode::Slide(s)),
+                None => m.extend([Mode::Stick, Mode::Slide(1.0), Mode::Slide(-1.0)]),
+            }
+            m
+        })
+        .collect();
+    let scale_x = a.amax().max(Real::MIN_POSITIVE);
+    let scale_w = b.amax();
+    let mut all = Vec::new();
+    let mut index = vec![0usize; n];
+    loop {
+        let modes: Vec<Mode> = (0..n).map(|i| options[i][index[i]]).collect();
+        if let Some(sol) = solve_modes(a, b, allowed, &modes, scale_x, scale_w) {
+            all.push(sol);
+        }
+        // Next combination (odometer).
+        let mut i = 0;
+        loop {
+            if i == n {
+                return Solutions { all };
+            }
+            index[i] += 1;
+            if index[i] < options[i].len() {
+                break;
+            }
+            index[i] = 0;
+            i += 1;
+        }
+    }
+}
+
+/// The solution for one combination of modes, if it is consistent.
+fn solve_modes(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    allowed: &[Allowed],
+    modes: &[Mode],
+    scale_a: Real,
+    scale_b: Real,
+) -> Option<Solution> {
+    let m = 2 * modes.len();
+    // One linear equation per unknown: rows of A (w = 0) or of the identity (x fixed).
+    let mut lhs = DMatrix::zeros(m, m);
+    let mut rhs = DVector::zeros(m);
+    for (i, mode) in modes.iter().enumerate() {
+        let (rn, rt) = (2 * i, 2 * i + 1);
+        match *mode {
+            Mode::Open => {
+                lhs[(rn, rn)] = 1.0;
+                lhs[(rt, rt)] = 1.0;
+            }
+            Mode::Stick => {
+                lhs.row_mut(rn).copy_from(&a.row(rn));
+                lhs.row_mut(rt).copy_from(&a.row(rt));
+                rhs[rn] = -b[rn];
+                rhs[rt] = -b[rt];
+            }
+            Mode::Slide(s) => {
+                lhs.row_mut(rn).copy_from(&a.row(rn));
+                rhs[rn] = -b[rn];
+                lhs[(rt, rt)] = 1.0;
+                lhs[(rt, rn)] = allowed[i].mu * s;
+            }
+        }
+    }
+    let svd = lhs.clone().svd(true, true);
+    let x = svd.solve(&rhs, Real::EPSILON * m as Real * svd.singular_values.max()).ok()?;
+    // The equations must hold (a rank-deficient system may have no solution).
+    let res = &lhs * &x - &rhs;
+    let tol_w = TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE);
+    if res.amax() > tol_w {
+        return None;
+    }
+    let w = a * &x + b;
+    let tol_x = TOL * x.amax().max(Real::MIN_POSITIVE);
+    for (i, mode) in modes.iter().enumerate() {
+        let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
+        let mu = allowed[i].mu;
+        let ok = match *mode {
+            Mode::Open => wn >= -tol_w,
+            Mode::Stick => xn >= -tol_x && xt.abs() <= mu * xn + tol_x,
+            Mode::Slide(s) => xn >= -tol_x && (allowed[i].slip.is_some() || s * wt >= -tol_w),
+        };
+        if !ok {
+            return None;
+        }
+    }
+    Some(Solution {
+        modes: modes.to_vec(),
+        x,
+        w,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one(a: [[Real; 2]; 2], b: [Real; 2], allowed: Allowed) -> Solutions {
+        solve(
+            &DMatrix::from_row_slice(2, 2, &[a[0][0], a[0][1], a[1][0], a[1][1]]),
+            &DVector::from_row_slice(&b),
+            &[allowed],
+        )
+    }
+
+    #[test]
+    fn a_pressed_contact_sticks_and_a_pulled_one_opens() {
+        let free = Allowed {
+            mu: 0.5,
+            open: true,
+            slip: None,
+        };
+        // A particle on a floor pressed by gravity (b_n = −g), no tangential push.
+        let s = one([[1.0, 0.0], [0.0, 1.0]], [-9.81, 0.0], free);
+        assert_eq!(s.all.len(), 1);
+        assert_eq!(s.all[0].modes, vec![Mode::Stick]);
+        assert!((s.all[0].x[0] - 9.81).abs() < 1e-12 && s.all[0].x[1].abs() < 1e-12);
+        // Pulled away: it opens.
+        let s = one([[1.0, 0.0], [0.0, 1.0]], [2.0, 1.0], free);
+        assert_eq!(s.all.len(), 1);
+        assert_eq!(s.all[0].modes, vec![Mode::Open]);
+        // Pressed and pushed sideways beyond the cone: it starts to slip along the push.
+        let s = one([[1.0, 0.0], [0.0, 1.0]], [-1.0, 3.0], free);
+        assert_eq!(s.all.len(), 1);
+        assert_eq!(s.all[0].modes, vec![Mode::Slide(1.0)]);
+        assert!((s.all[0].x[1] + 0.5).abs() < 1e-12 && (s.all[0].w[1] - 2.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn painleve_sliding_contact_has_no_or_two_solutions() {
+        // A sliding contact (s = +1) whose effective normal coefficient
+        // h = m_nn − μ m_nt is negative: pressed (b_n < 0) there is no solution, pulled
+        // (b_n > 0) there are two (open, or slide with x_n = −b_n/h).
+        let (nn, nt, tt, mu) = (1.0, 1.5, 3.0, 1.0); // h = −0.5
+        let sliding = Allowed {
+            mu,
+            open: true,
+            slip: Some(1.0),
+        };
+        assert!(one([[nn, nt], [nt, tt]], [-1.0, 0.0], sliding).all.is_empty());
+        let two = one([[nn, nt], [nt, tt]], [1.0, 0.0], sliding);
+        assert_eq!(two.all.len(), 2);
+        assert!((two.all[1].x[0] - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rank_deficient_a_is_handled() {
+        // One degree of freedom: A = m [[1, k], [k, k²]]; the sticking system is singular
+        // but consistent when the tangential row is a multiple of the normal one.
+        let k = 0.1;
+        let a = [[1.0, k], [k, k * k]];
+        let s = one(
+            a,
+            [-2.0, -2.0 * k],
+            Allowed {
+                mu: 1.0,
+                open: true,
+                slip: None,
+            },
+        );
+        assert!(s.all.iter().any(|sol| sol.modes == vec![Mode::Stick]));
+        for sol in &s.all {
+            assert!(sol.w[0].abs() < 1e-9 || sol.modes == vec![Mode::Open]);
+        }
+    }
+}
