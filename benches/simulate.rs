@@ -23,7 +23,8 @@
 //! Criterion's throughput is set to the simulated time, so its `thrpt` line reads
 //! *simulated seconds per wall second*. The work counters (steps, right-hand-side
 //! evaluations, impacts, samples, log size) do not depend on the timing; they are printed
-//! once, before the measurements, with a wall time of a few plain runs.
+//! once, before the measurements, with the median wall time of 15 rounds of 5 plain runs,
+//! the three variants interleaved in each round (the machine may be shared).
 //!
 //! `cargo bench --bench simulate`
 
@@ -92,38 +93,60 @@ fn recorder() -> Recorder {
     }
 }
 
-/// Prints the counters of one run and the mean wall time of `reps` plain runs.
-fn report(label: &str, reps: u32, mut run: impl FnMut() -> (RunSummary, usize)) {
-    let (summary, log_bytes) = run();
-    assert!(
-        matches!(summary.stop, StopReason::EndTime),
-        "{label}: the run stopped early: {}",
-        summary.stop
-    );
-    let start = Instant::now();
-    for _ in 0..reps {
-        black_box(run());
+/// One variant of the run for [`report`]: a label and a run returning its summary and
+/// log size (bytes).
+type Variant<'a> = (&'a str, Box<dyn Fn() -> (RunSummary, usize) + 'a>);
+
+/// Prints the counters of one run of each variant and its wall time: the median over
+/// `rounds` rounds of the mean of `reps` runs, the variants interleaved within each round
+/// so that a change of the machine's load hits them alike.
+fn report(variants: &[Variant<'_>], rounds: usize, reps: u32) {
+    let mut walls = vec![Vec::new(); variants.len()];
+    for _ in 0..rounds {
+        for (k, (_, run)) in variants.iter().enumerate() {
+            let start = Instant::now();
+            for _ in 0..reps {
+                black_box(run());
+            }
+            walls[k].push(start.elapsed().as_secs_f64() / f64::from(reps));
+        }
     }
-    let wall = start.elapsed().as_secs_f64() / f64::from(reps);
-    let c = summary.counters;
-    let t = summary.state.t;
-    println!(
-        "{label:<16} wall {:>7.3} ms | {:>7.0} simulated s per wall s | {} steps ({} rejected), \
-         {} rhs evaluations ({:.0} per simulated s, {:.2e} per wall s) | {} impacts \
-         ({:.1} per simulated s, {:.0} per wall s) | {} samples | log {} bytes",
-        1e3 * wall,
-        t / wall,
-        c.steps,
-        c.rejected,
-        c.rhs_evals,
-        c.rhs_evals as f64 / t,
-        c.rhs_evals as f64 / wall,
-        c.impacts,
-        c.impacts as f64 / t,
-        c.impacts as f64 / wall,
-        c.samples,
-        log_bytes,
-    );
+    let mut base = None;
+    for ((label, run), walls) in variants.iter().zip(&mut walls) {
+        let (summary, log_bytes) = run();
+        assert!(
+            matches!(summary.stop, StopReason::EndTime),
+            "{label}: the run stopped early: {}",
+            summary.stop
+        );
+        walls.sort_by(f64::total_cmp);
+        let wall = walls[walls.len() / 2];
+        let (lo, hi) = (walls[0], walls[walls.len() - 1]);
+        let base = *base.get_or_insert(wall);
+        let c = summary.counters;
+        let t = summary.state.t;
+        println!(
+            "{label:<16} wall {:>6.2} ms (rounds {:.2}–{:.2}, {:>4.0} % of no log) | \
+             {:>5.0} simulated s per wall s | {} steps ({} rejected), {} rhs evaluations \
+             ({:.0} per simulated s, {:.2e} per wall s) | {} impacts ({:.1} per simulated s, \
+             {:.0} per wall s) | {} samples | log {} bytes",
+            1e3 * wall,
+            1e3 * lo,
+            1e3 * hi,
+            100.0 * wall / base,
+            t / wall,
+            c.steps,
+            c.rejected,
+            c.rhs_evals,
+            c.rhs_evals as f64 / t,
+            c.rhs_evals as f64 / wall,
+            c.impacts,
+            c.impacts as f64 / t,
+            c.impacts as f64 / wall,
+            c.samples,
+            log_bytes,
+        );
+    }
 }
 
 fn simulate_bench(c: &mut Criterion) {
@@ -136,9 +159,15 @@ fn simulate_bench(c: &mut Criterion) {
         s.settings.integrator.rtol,
         s.settings.integrator.atol,
     );
-    report("no log", 20, || (simulate(&s, &mut NullObserver), 0));
-    report("samples only", 20, || (simulate(&s, &mut recorder()), 0));
-    report("mcap log 100 Hz", 20, || simulate_logged(&s));
+    let variants: [Variant<'_>; 3] = [
+        ("no log", Box::new(|| (simulate(&s, &mut NullObserver), 0))),
+        (
+            "samples only",
+            Box::new(|| (simulate(&s, &mut recorder()), 0)),
+        ),
+        ("mcap log 100 Hz", Box::new(|| simulate_logged(&s))),
+    ];
+    report(&variants, 15, 5);
     println!();
 
     let mut group = c.benchmark_group("simulate_double_pendulum_10s");
