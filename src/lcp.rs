@@ -151,7 +151,9 @@ fn solve_modes(
         }
     }
     let svd = lhs.clone().svd(true, true);
-    let x = svd.solve(&rhs, Real::EPSILON * m as Real * svd.singular_values.max()).ok()?;
+    let x = svd
+        .solve(&rhs, Real::EPSILON * m as Real * svd.singular_values.max())
+        .ok()?;
     // The equations must hold (a rank-deficient system may have no solution).
     let res = &lhs * &x - &rhs;
     let tol_w = TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE);
@@ -225,7 +227,11 @@ mod tests {
             open: true,
             slip: Some(1.0),
         };
-        assert!(one([[nn, nt], [nt, tt]], [-1.0, 0.0], sliding).all.is_empty());
+        assert!(
+            one([[nn, nt], [nt, tt]], [-1.0, 0.0], sliding)
+                .all
+                .is_empty()
+        );
         let two = one([[nn, nt], [nt, tt]], [1.0, 0.0], sliding);
         assert_eq!(two.all.len(), 2);
         assert!((two.all[1].x[0] - 2.0).abs() < 1e-12);

@@ -257,7 +257,7 @@ fn run_writes_the_log_and_prints_the_table_and_the_audit() {
         first.starts_with("kane_double_pendulum: stopped at t = 0.189"),
         "{first}"
     );
-    assert!(first.contains("accumulation of impacts on contact pair #0"));
+    assert!(first.contains("accumulation of impacts on rodB/floor"));
     let c = &audit.counters;
     assert_eq!(
         counters(&stdout),
@@ -703,7 +703,7 @@ fn inspect_prints_the_same_impacts_and_the_audit() {
         .find(|l| l.trim_start().starts_with("stop reason"))
         .unwrap();
     assert!(
-        stop.contains("accumulation: accumulation of impacts on contact pair #0"),
+        stop.contains("accumulation: accumulation of impacts on rodB/floor"),
         "{stop}"
     );
     let (n, steps, rejected, rhs) = counters(&stdout);
