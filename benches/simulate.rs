@@ -76,7 +76,7 @@ fn simulate_logged(s: &Scene) -> (RunSummary, usize) {
         writer,
         &s.model,
         (&s.name, &s.text),
-        &s.settings,
+        (&s.settings, &elastic()),
         s.initial.t,
         sim.scales().gap_tol,
     )

@@ -177,7 +177,7 @@ fn run_with<W: Write + Seek>(
         writer,
         &scene.model,
         (&scene.name, &scene.text),
-        &scene.settings,
+        (&scene.settings, &overrides),
         scene.initial.t,
         sim.scales().gap_tol,
     )
@@ -253,12 +253,18 @@ fn on_topic<T: serde::de::DeserializeOwned>(bytes: &[u8], topic: Topic) -> Vec<T
 
 /// `/state` samples the run must have written: the output grid `k / rate` up to the stop
 /// time, two at each impact instant (before and after the jump), and the final one.
+/// The output grid up to the stop, two samples per impact instant, and the final state
+/// unless a sample was already taken at the stop time (the grid's last point, or the
+/// sample after the jump when the run stops at an impact).
 fn expected_samples(run: &Run) -> u64 {
     let rate = run.scene.settings.output_rate;
-    let grid = (run.summary.state.t * rate + 1e-9).floor() as u64 + 1;
+    let t_stop = run.summary.state.t;
+    let grid = (t_stop * rate + 1e-9).floor() as u64 + 1;
     let mut instants: Vec<f64> = run.seen.impacts.iter().map(|i| i.t).collect();
     instants.dedup();
-    grid + 2 * instants.len() as u64 + 1
+    let on_grid = (t_stop * rate - (t_stop * rate).round()).abs() < 1e-9;
+    let final_sample = !(on_grid || instants.last() == Some(&t_stop));
+    grid + 2 * instants.len() as u64 + u64::from(final_sample)
 }
 
 fn pair_name(model: &Model, ev: &ImpactEvent) -> String {
@@ -773,27 +779,37 @@ fn an_interrupted_run_leaves_a_complete_log() {
     );
 }
 
-/// A run whose impact law fails (e = 1.5 overrides the scene's material; the library does
-/// not validate overrides, the command line does) stops at the first impact of the ball,
-/// `t₁ = √(2 h₀ / g)`, with an `error: …` audit and a readable log up to that instant.
+/// A run whose impact law fails: `pendulum_wall` with μ = 25 (an override). Its one
+/// degree of freedom makes W singular (rank 1, `m_nt/m_tt = −20`), and with `μ ≥ 20`
+/// friction holds the approaching contact: the first impact jams (`ImpactError::Jam`).
+/// The run stops there with an `error: …` audit and a readable log up to that instant.
 #[test]
 fn a_failed_run_leaves_a_complete_log() {
     let overrides = MaterialOverride {
-        e: Some(1.5),
+        mu: Some(25.0),
         ..MaterialOverride::default()
     };
-    let run = run_hooked(load("bouncing_ball"), overrides, Hook::None, None);
-    let t1 = (2.0 * 1.0 / 9.81_f64).sqrt();
+    let run = run_hooked(load("pendulum_wall"), overrides, Hook::None, None);
     let t = run.summary.state.t;
     match &run.summary.stop {
         StopReason::Failed(SimError::Impact {
             t: ti,
             pair: 0,
-            source: ImpactError::RestitutionOutOfRange { .. },
+            source: ImpactError::Jam { law: "newton" },
+            ..
         }) => assert_eq!(*ti, t),
         other => panic!("{other:?}"),
     }
-    assert!((t - t1).abs() < 1e-9, "{t} vs {t1}");
+    // The first impact of the pendulum released from 60°: the same time as without the
+    // override (free flight does not depend on μ).
+    let free = run_hooked(
+        load("pendulum_wall"),
+        MaterialOverride::default(),
+        Hook::None,
+        None,
+    );
+    let t1 = free.seen.impacts[0].t;
+    assert_eq!(t, t1);
 
     let log = ricochet::log::read_bytes(&run.bytes).unwrap();
     assert_eq!(log.ending, Ending::Complete);
@@ -801,7 +817,7 @@ fn a_failed_run_leaves_a_complete_log() {
     let audit = log.audit.as_ref().unwrap();
     assert!(
         audit.stop_reason.starts_with(&format!(
-            "error: at t = {t}: the impact of contact pair #0 failed"
+            "error: at t = {t}: the impact on bob/wall failed: the contact jams"
         )),
         "{}",
         audit.stop_reason
@@ -809,18 +825,35 @@ fn a_failed_run_leaves_a_complete_log() {
     assert_eq!(audit.t_stop, t);
     assert_eq!(audit.counters.impacts, 0);
     assert!(log.impacts.is_empty());
-    // The grid up to t₁ (500 Hz), the sample just before the impact, the final one.
-    let grid = (t * 500.0).floor() as u64 + 1;
-    assert_eq!(log.count(Topic::State), grid + 2);
+    // The grid up to t₁ (100 Hz) and the sample just before the impact.
+    let grid = (t * 100.0).floor() as u64 + 1;
+    assert_eq!(log.count(Topic::State), grid + 1);
     assert_eq!(log.count(Topic::State), run.seen.samples.len() as u64);
-    let states: Vec<StateRecord> = on_topic(&run.bytes, Topic::State);
-    // Free fall from 1.1 m (centre) to the floor contact at 0.1 m.
-    let last = states.last().unwrap();
-    assert!((last.q[0] - 0.1).abs() < 1e-9 && (last.u[0] + 9.81 * t1).abs() < 1e-9);
     let logs: Vec<Log> = on_topic(&run.bytes, Topic::Log);
     let last_log = logs.last().unwrap();
     assert_eq!(last_log.level, LogLevel::Error);
     assert!(last_log.message.contains("failed"), "{}", last_log.message);
+}
+
+#[test]
+fn invalid_overrides_are_refused_before_the_run() {
+    let scene = load("bouncing_ball");
+    for (e, mu) in [
+        (Some(1.5), None),
+        (Some(-0.1), None),
+        (None, Some(-1.0)),
+        (None, Some(f64::NAN)),
+    ] {
+        let overrides = MaterialOverride {
+            e,
+            mu,
+            ..MaterialOverride::default()
+        };
+        let err = Simulation::new(&scene.model, &scene.settings, overrides)
+            .err()
+            .unwrap();
+        assert!(matches!(err, SimError::Override { .. }), "{err}");
+    }
 }
 
 /// A run whose log fails (the observer refuses a sample: a full disk) stops with

@@ -132,7 +132,9 @@ pub struct StateRecord {
     pub mode_code: u8,
     /// Every contact pair that the scene watches, in a fixed order.
     pub contacts: Vec<ContactState>,
-    /// Number of impacts since the start of the run, including any at this instant.
+    /// Number of impacts since the start of the run, up to this sample: at an impact
+    /// instant, the sample before the jump excludes that instant's impacts and the one
+    /// after includes them.
     pub impact_count: u64,
 }
 

@@ -13,7 +13,10 @@ use super::{
 };
 use crate::math::{Real, Vec2};
 use crate::model::Model;
-use crate::sim::{ImpactEvent, Level, Observer, ObserverError, RunSummary, Sample, StopReason};
+use crate::settings::Settings;
+use crate::sim::{
+    ImpactEvent, Level, MaterialOverride, Observer, ObserverError, RunSummary, Sample, StopReason,
+};
 
 /// Colours of the bodies, in body order (cycled).
 const PALETTE: [(f64, f64, f64); 6] = [
@@ -47,17 +50,27 @@ pub struct RunLogger<W: Write + Seek> {
 
 impl<W: Write + Seek> RunLogger<W> {
     /// Starts the log of a run of `model`: writes the scene (`name`, file `text`), the
-    /// `settings`, and the bodies and obstacles on `/scene` at `t0`.
-    pub fn new<S: Serialize>(
+    /// `settings` with the material `overrides` (so that the log describes the run it
+    /// holds), and the bodies and obstacles on `/scene` at `t0`.
+    pub fn new(
         mut writer: LogWriter<W>,
         model: &Model,
         (name, text): (&str, &str),
-        settings: &S,
+        (settings, overrides): (&Settings, &MaterialOverride),
         t0: Real,
         gap_tol: Real,
     ) -> Result<Self, LogError> {
+        #[derive(Serialize)]
+        struct AsRun<'a> {
+            #[serde(flatten)]
+            settings: &'a Settings,
+            material_overrides: &'a MaterialOverride,
+        }
         writer.scene(name, text)?;
-        writer.settings(settings)?;
+        writer.settings(&AsRun {
+            settings,
+            material_overrides: overrides,
+        })?;
         let bodies: Vec<String> = model.bodies().iter().map(|b| b.name.clone()).collect();
         let side = |c: crate::model::ColliderId| -> String {
             model.colliders()[c.index()]

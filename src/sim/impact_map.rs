@@ -13,7 +13,7 @@ use super::SimError;
 
 /// Overrides of the scene's contact materials, for every pair (the command line's
 /// `--law`, `--e`, `--mu`).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct MaterialOverride {
     /// Impact law for every pair.
     pub law: Option<Law>,
@@ -24,6 +24,27 @@ pub struct MaterialOverride {
 }
 
 impl MaterialOverride {
+    /// Checks the overrides: `e ∈ [0, 1]`, `μ ≥ 0`, finite.
+    pub fn validate(&self) -> Result<(), SimError> {
+        if let Some(e) = self.e
+            && !(0.0..=1.0).contains(&e)
+        {
+            return Err(SimError::Override {
+                what: "e",
+                value: e,
+            });
+        }
+        if let Some(mu) = self.mu
+            && !(mu >= 0.0 && mu.is_finite())
+        {
+            return Err(SimError::Override {
+                what: "mu",
+                value: mu,
+            });
+        }
+        Ok(())
+    }
+
     /// The material of a pair after the overrides.
     pub fn apply(&self, m: Material) -> Material {
         Material {
@@ -174,6 +195,7 @@ impl ImpactMap {
         let outcome = impact::solve(material.law, &problem).map_err(|source| SimError::Impact {
             t,
             pair: pair.index(),
+            name: pair_name(model, pair),
             source,
         })?;
         // 4. Δu = M⁻¹ Jᵀ I.
@@ -201,4 +223,11 @@ impl ImpactMap {
             energy_after,
         }))
     }
+}
+
+/// The name of a contact pair, `<collider a>/<collider b>`.
+pub fn pair_name(model: &Model, pair: PairId) -> String {
+    let p = &model.pairs()[pair.index()];
+    let name = |c: crate::model::ColliderId| &model.colliders()[c.index()].name;
+    format!("{}/{}", name(p.a), name(p.b))
 }

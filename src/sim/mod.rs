@@ -133,12 +133,14 @@ pub enum SimError {
         message: String,
     },
     /// The impact law could not solve an impact.
-    #[error("at t = {t}: the impact of contact pair #{pair} failed: {source}")]
+    #[error("at t = {t}: the impact on {name} failed: {source}")]
     Impact {
         /// Time (s).
         t: Real,
         /// The contact pair.
         pair: usize,
+        /// Its name, `<collider a>/<collider b>`.
+        name: String,
         /// The law's error.
         #[source]
         source: ImpactError,
@@ -163,6 +165,14 @@ pub enum SimError {
     /// The settings cannot be used.
     #[error(transparent)]
     Settings(#[from] SettingsError),
+    /// A material override is out of range.
+    #[error("the override of {what} = {value} is out of range (e ∈ [0, 1], μ ≥ 0)")]
+    Override {
+        /// `e` or `mu`.
+        what: &'static str,
+        /// The value given.
+        value: Real,
+    },
     /// The initial state does not fit the model.
     #[error("the initial state has {got} coordinates or speeds, the model {expected}")]
     InitialState {
@@ -312,6 +322,8 @@ pub struct Simulation<'m> {
     next_output: u64,
     audit: EnergyAudit,
     counters: RunCounters,
+    /// Time of the last sample reported (s).
+    last_sample_t: Option<Real>,
 }
 
 impl<'m> Simulation<'m> {
@@ -321,6 +333,7 @@ impl<'m> Simulation<'m> {
         settings: &Settings,
         overrides: MaterialOverride,
     ) -> Result<Self, SimError> {
+        overrides.validate()?;
         let system = MotionSystem::new(model);
         let n = crate::integrate::OdeSystem::dim(&system);
         let npairs = model.pairs().len();
@@ -343,6 +356,7 @@ impl<'m> Simulation<'m> {
             next_output: 0,
             audit: EnergyAudit::default(),
             counters: RunCounters::default(),
+            last_sample_t: None,
         })
     }
 
@@ -380,6 +394,7 @@ impl<'m> Simulation<'m> {
         let t_end = self.settings.t_end;
         loop {
             let t = self.stepper.t();
+            self.rearm(t)?;
             if interrupt.is_some_and(|flag| flag.load(Ordering::Relaxed)) {
                 return Ok(StopReason::Interrupted { t });
             }
@@ -439,6 +454,34 @@ impl<'m> Simulation<'m> {
         result?;
         if self.next_output as Real / rate <= t0 {
             self.next_output += 1;
+        }
+        Ok(())
+    }
+
+    /// Stage `rearm`: a pair disarmed after a spurious event is armed again once its gap
+    /// exceeds the closed-contact tolerance; then the step cap is lifted.
+    fn rearm(&mut self, t: Real) -> Result<(), SimError> {
+        if self.armed.iter().all(|&a| a) {
+            return Ok(());
+        }
+        let n = self.model.nq();
+        update_positions(self.model, &mut self.sampler, t, &self.stepper.y()[..n])
+            .map_err(|e| e.at(t))?;
+        for (k, armed) in self.armed.iter_mut().enumerate() {
+            if !*armed {
+                let gap = crate::contact::signed_gap(
+                    self.model,
+                    &self.sampler,
+                    PairId(k),
+                    Real::INFINITY,
+                )
+                .map_err(|e| e.at(t))?
+                .unwrap_or(Real::INFINITY);
+                *armed = gap > self.scales.gap_tol;
+            }
+        }
+        if self.armed.iter().all(|&a| a) {
+            self.stepper.set_h_max(self.settings.integrator.h_max);
         }
         Ok(())
     }
@@ -514,6 +557,7 @@ impl<'m> Simulation<'m> {
         };
         observer.sample(self.model, &sample).map_err(|e| e.at(t))?;
         self.counters.samples += 1;
+        self.last_sample_t = Some(t);
         Ok(())
     }
 
@@ -600,10 +644,20 @@ impl<'m> Simulation<'m> {
         if applied == 0
             && let Some(event) = event
         {
-            // The event closed a contact that does not approach: a resting or rolling
-            // contact, which needs persistent-contact modes.
             let pair = PairId(event.index);
             let frame = self.map.frame(self.model, pair, t, &y[..n], &y[n..2 * n])?;
+            if frame.v_n() > self.scales.v_tiny {
+                // The contact separates: the "crossing" was the gap's rounding noise just
+                // after an impact (the separation is still below it). Disarm the pair
+                // until it is clearly open, with steps short enough to see it close again.
+                self.armed[pair.index()] = false;
+                let h = 10.0 * self.scales.gap_tol / frame.v_n();
+                self.stepper
+                    .set_h_max(h.min(self.settings.integrator.h_max));
+                return Ok((0, None));
+            }
+            // The event closed a contact that does not approach: a resting or rolling
+            // contact, which needs persistent-contact modes.
             let reason = format!(
                 "the contact closed ({:?}) without approaching: gap {:.3e} m, normal velocity \
                  {:.3e} m/s",
@@ -645,12 +699,10 @@ impl<'m> Simulation<'m> {
 
     /// A stop for an accumulation (the final message goes to the log in [`Self::finish`]).
     fn accumulation(&mut self, t: Real, pair: PairId, reason: String) -> StopReason {
-        let p = &self.model.pairs()[pair.index()];
-        let name = |c: crate::model::ColliderId| &self.model.colliders()[c.index()].name;
         StopReason::Accumulation {
             t,
             pair: pair.index(),
-            name: format!("{}/{}", name(p.a), name(p.b)),
+            name: impact_map::pair_name(self.model, pair),
             reason,
         }
     }
@@ -675,8 +727,11 @@ impl<'m> Simulation<'m> {
             StopReason::Accumulation { .. } | StopReason::Interrupted { .. } => Level::Warning,
             StopReason::EndTime => Level::Info,
         };
-        // The last sample and message are best effort: the run is over either way.
-        let _ = self.sample(t, &y, false, observer);
+        // The last sample and message are best effort: the run is over either way. No
+        // sample twice at the same instant (the output grid may have just taken it).
+        if self.last_sample_t != Some(t) {
+            let _ = self.sample(t, &y, false, observer);
+        }
         let _ = observer.message(t, level, &format!("run stopped at t = {t} s: {stop}"));
         let c = self.stepper.counters();
         self.counters.steps = c.steps;

@@ -29,28 +29,28 @@ pub struct Args {
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// End time (s), instead of the scene's.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<Real>,
     /// Impact law for every contact: newton, kane-levinson, poisson, stronge.
     #[arg(long)]
     law: Option<Law>,
     /// Coefficient of restitution for every contact, in [0, 1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     e: Option<Real>,
     /// Coefficient of friction for every contact, ≥ 0.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     mu: Option<Real>,
     /// Integration method: dopri5, rk4.
     #[arg(long)]
     method: Option<Method>,
     /// Relative tolerance of DOPRI5.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     rtol: Option<Real>,
     /// Absolute tolerance of DOPRI5.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     atol: Option<Real>,
     /// Step of RK4 (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     dt: Option<Real>,
     /// Print only the summary line, not the impact table and the audit.
     #[arg(short, long)]
@@ -164,13 +164,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
     let mut sim = Simulation::new(&scene.model, &scene.settings, overrides)
         .with_context(|| format!("{}: cannot simulate", args.scene.display()))?;
-    let writer = LogWriter::create(&output, LogOptions::default())
-        .with_context(|| format!("cannot create the log {}", output.display()))?;
+    let writer = LogWriter::create(&output, LogOptions::default())?;
     let log = RunLogger::new(
         writer,
         &scene.model,
         (&scene.name, &scene.text),
-        &scene.settings,
+        (&scene.settings, &overrides),
         scene.initial.t,
         sim.scales().gap_tol,
     )?;
