@@ -6,10 +6,10 @@ use std::io::{Seek, Write};
 use serde::Serialize;
 
 use super::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
-use super::foxglove::Color;
+use super::foxglove::{Color, Pose as FoxglovePose, Time};
 use super::{
-    Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, LogError, LogLevel,
-    LogWriter, Planar, SceneUpdate, StateRecord,
+    Audit, ContactMode, ContactState, Counters, Energy, FrameTransforms, ImpactRecord, LogError,
+    LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
 };
 use crate::math::{Real, Vec2};
 use crate::model::Model;
@@ -40,12 +40,14 @@ pub struct RunLogger<W: Write + Seek> {
     pairs: Vec<String>,
     /// Body names of each pair's two sides (`world` for an obstacle).
     sides: Vec<(String, String)>,
-    /// Body names, in body order.
-    bodies: Vec<String>,
     /// A contact is drawn as closed when its gap is at most this (m).
     gap_tol: Real,
     impacts: u64,
     arrow: ArrowStyle,
+    /// The `/state` record, updated in place at each sample (no allocation).
+    state: StateRecord,
+    /// The `/tf` message, updated in place at each sample.
+    tf: FrameTransforms,
 }
 
 impl<W: Write + Seek> RunLogger<W> {
@@ -77,7 +79,7 @@ impl<W: Write + Seek> RunLogger<W> {
                 .body
                 .map_or_else(|| "world".to_owned(), |b| bodies[b.index()].clone())
         };
-        let pairs = model
+        let pairs: Vec<String> = model
             .pairs()
             .iter()
             .map(|p| {
@@ -94,14 +96,21 @@ impl<W: Write + Seek> RunLogger<W> {
             .map(|p| (side(p.a), side(p.b)))
             .collect();
         writer.scene_update(t0, &scene_entities(model, &bodies, t0)?)?;
+        let contacts = (pairs.iter())
+            .map(|name| ContactState::new(name.clone(), ContactMode::Free, 0.0))
+            .collect();
+        let state = StateRecord::new(t0, vec![], vec![], Energy::new(0.0, 0.0), contacts, 0);
+        let identity = crate::math::Pose::identity();
+        let tf = draw::body_transforms(t0, bodies.iter().map(|b| (b.as_str(), identity)))?;
         Ok(Self {
             writer,
             pairs,
             sides,
-            bodies,
             gap_tol,
             impacts: 0,
             arrow: ArrowStyle::default(),
+            state,
+            tf,
         })
     }
 
@@ -180,33 +189,40 @@ fn planar(v: Vec2) -> Planar {
 
 impl<W: Write + Seek> Observer for RunLogger<W> {
     fn sample(&mut self, _model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
-        let contacts = (self.pairs.iter().zip(s.gaps))
-            .map(|(name, &gap)| {
-                let mode = if s.at_impact && gap <= self.gap_tol {
-                    ContactMode::Impact
-                } else {
-                    ContactMode::Free
-                };
-                ContactState::new(name.clone(), mode, gap)
-            })
-            .collect();
-        let energy = Energy::new(s.energy.kinetic, s.energy.potential);
-        let record = StateRecord::new(
-            s.t,
-            s.q.to_vec(),
-            s.u.to_vec(),
-            energy,
-            contacts,
-            self.impacts,
-        );
-        self.writer.state(&record)?;
-        let poses = self
-            .bodies
-            .iter()
-            .map(String::as_str)
-            .zip(s.poses.iter().copied());
-        self.writer
-            .transforms(s.t, &draw::body_transforms(s.t, poses)?)?;
+        // `/state`: the cached record with this sample's numbers.
+        let rec = &mut self.state;
+        rec.t = s.t;
+        rec.q.clear();
+        rec.q.extend_from_slice(s.q);
+        rec.u.clear();
+        rec.u.extend_from_slice(s.u);
+        rec.energy = Energy::new(s.energy.kinetic, s.energy.potential);
+        for (c, &gap) in rec.contacts.iter_mut().zip(s.gaps) {
+            c.mode = if s.at_impact && gap <= self.gap_tol {
+                ContactMode::Impact
+            } else {
+                ContactMode::Free
+            };
+            c.mode_code = c.mode.code();
+            c.gap = gap;
+        }
+        rec.mode = ContactMode::of_run(rec.contacts.iter().map(|c| c.mode));
+        rec.mode_code = rec.mode.code();
+        rec.impact_count = self.impacts;
+        self.writer.state(&self.state)?;
+        // `/tf`: the cached transforms with this sample's poses.
+        let time = Time::from_seconds(s.t)?;
+        for (tf, pose) in self.tf.transforms.iter_mut().zip(s.poses) {
+            let p = FoxglovePose::planar(
+                pose.translation.x,
+                pose.translation.y,
+                pose.rotation.angle(),
+            );
+            tf.timestamp = time;
+            tf.translation = p.position;
+            tf.rotation = p.orientation;
+        }
+        self.writer.transforms(s.t, &self.tf)?;
         Ok(())
     }
 

@@ -87,6 +87,8 @@ pub struct LogWriter<W: Write + Seek> {
     channels: [u16; Topic::ALL.len()],
     /// Next sequence number of each topic.
     sequences: [u32; Topic::ALL.len()],
+    /// The serialized message, reused from one to the next.
+    buffer: Vec<u8>,
 }
 
 impl LogWriter<BufWriter<File>> {
@@ -121,6 +123,7 @@ impl<W: Write + Seek> LogWriter<W> {
             mcap,
             channels,
             sequences: [0; Topic::ALL.len()],
+            buffer: Vec::new(),
         })
     }
 
@@ -183,14 +186,12 @@ impl<W: Write + Seek> LogWriter<W> {
     /// Writes a scene update on `/scene` at simulated time `t` (s). The entities carry their
     /// own timestamps, which the 3-D panel uses; normally they equal `t`.
     pub fn scene_update(&mut self, t: f64, update: &SceneUpdate) -> Result<(), LogError> {
-        check_finite(Topic::Scene, t, update)?;
-        self.write(Topic::Scene, t, update)
+        self.write_checked(Topic::Scene, t, update)
     }
 
     /// Writes frame transforms on `/tf` at simulated time `t` (s).
     pub fn transforms(&mut self, t: f64, transforms: &FrameTransforms) -> Result<(), LogError> {
-        check_finite(Topic::Tf, t, transforms)?;
-        self.write(Topic::Tf, t, transforms)
+        self.write_checked(Topic::Tf, t, transforms)
     }
 
     /// Writes a text message on `/log` at simulated time `t` (s), from `ricochet`.
@@ -224,10 +225,41 @@ impl<W: Write + Seek> LogWriter<W> {
     /// Serializes `message` and writes it on `topic` at simulated time `t` (s).
     fn write<M: Serialize>(&mut self, topic: Topic, t: f64, message: &M) -> Result<(), LogError> {
         let time = nanoseconds(t)?;
-        let data = serde_json::to_vec(message).map_err(|source| LogError::Encode {
+        self.encode(topic, message)?;
+        self.write_encoded(topic, time)
+    }
+
+    /// [`write`](Self::write) for a message whose numbers are not checked beforehand:
+    /// refuses it if it holds a NaN or an infinity, which `serde_json` writes as `null`
+    /// (the Foxglove schemas have no nullable field, so a `null` can only come from one).
+    /// The encoded bytes are scanned for `null`; only if they hold one (which a name may
+    /// also do) is the message examined field by field.
+    fn write_checked<M: Serialize>(
+        &mut self,
+        topic: Topic,
+        t: f64,
+        message: &M,
+    ) -> Result<(), LogError> {
+        let time = nanoseconds(t)?;
+        self.encode(topic, message)?;
+        if self.buffer.windows(4).any(|w| w == b"null") {
+            check_finite(topic, t, message)?;
+        }
+        self.write_encoded(topic, time)
+    }
+
+    /// Serializes `message` into the reused buffer.
+    fn encode<M: Serialize>(&mut self, topic: Topic, message: &M) -> Result<(), LogError> {
+        self.buffer.clear();
+        serde_json::to_writer(&mut self.buffer, message).map_err(|source| LogError::Encode {
             what: topic.name(),
             source,
-        })?;
+        })
+    }
+
+    /// Writes the buffer on `topic` at `time` (ns).
+    fn write_encoded(&mut self, topic: Topic, time: u64) -> Result<(), LogError> {
+        let data = &self.buffer;
         let i = topic.index();
         let header = MessageHeader {
             channel_id: self.channels[i],
@@ -235,7 +267,7 @@ impl<W: Write + Seek> LogWriter<W> {
             log_time: time,
             publish_time: time,
         };
-        self.mcap.write_to_known_channel(&header, &data)?;
+        self.mcap.write_to_known_channel(&header, data)?;
         self.sequences[i] = self.sequences[i].wrapping_add(1);
         Ok(())
     }
@@ -249,8 +281,7 @@ impl<W: Write + Seek> LogWriter<W> {
     }
 }
 
-/// Refuses a message with a NaN or an infinity, which `serde_json` would write as `null`
-/// (the Foxglove schemas have no nullable field, so `null` can only come from one).
+/// Refuses a message with a NaN or an infinity (a `null` in its JSON), naming the field.
 fn check_finite<M: Serialize>(topic: Topic, t: f64, message: &M) -> Result<(), LogError> {
     let what = topic.name();
     let json = serde_json::to_value(message).map_err(|source| LogError::Encode { what, source })?;
