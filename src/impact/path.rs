@@ -101,6 +101,25 @@ impl Phases {
         }
     }
 
+    /// A single straight phase of type `kind` from the origin of the impulse plane to the
+    /// impulse `i`, ending at the velocity `v_s`: the path of a law without phases (the
+    /// generalized Newton law of several contacts, time-stepping). Along a straight path
+    /// the works are `½ I_n (v_n^A + v_n^S)` and `½ I_t (v_t^A + v_t^S)`.
+    pub fn straight(
+        v_a: ContactVelocity,
+        kind: CollisionType,
+        i: Impulse,
+        v_s: ContactVelocity,
+    ) -> Self {
+        let end = PathPoint {
+            i,
+            v: v_s,
+            work_n: 0.5 * i.n * (v_a.n + v_s.n),
+            work_t: 0.5 * i.t * (v_a.t + v_s.t),
+        };
+        Self::one(v_a, kind, end)
+    }
+
     /// The number of phases (1 or 2).
     pub fn len(&self) -> usize {
         usize::from(self.len)
