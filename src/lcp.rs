@@ -98,7 +98,7 @@ pub fn solve(a: &DMatrix<Real>, b: &DVector<Real>, allowed: &[Allowed]) -> Solut
     loop {
         let modes: Vec<Mode> = (0..n).map(|i| options[i][index[i]]).collect();
         if let Some(sol) = solve_modes(a, b, allowed, &modes, scale_x, scale_w) {
-            all.push(sol);
+            push_distinct(&mut all, sol, scale_w);
         }
         // Next combination (odometer).
         let mut i = 0;
@@ -116,6 +116,61 @@ pub fn solve(a: &DMatrix<Real>, b: &DVector<Real>, allowed: &[Allowed]) -> Solut
     }
 }
 
+/// Adds `sol` unless a solution with the same motion `w` is there already: two mode sets
+/// with the same `w` differ only in forces that do not move anything — points at a
+/// boundary (an open point with no force, a closed point with no force), or redundant
+/// points whose forces may be shared in many ways (a rod lying on two points of a floor;
+/// `Jᵀ Δx = 0` since `Δxᵀ A Δx = 0`). Of two such, the one with more open points is kept.
+fn push_distinct(all: &mut Vec<Solution>, sol: Solution, scale_w: Real) {
+    let tol = TOL * scale_w.max(sol.w.amax()).max(Real::MIN_POSITIVE);
+    let open = |s: &Solution| s.modes.iter().filter(|m| **m == Mode::Open).count();
+    match all.iter_mut().find(|s| (&s.w - &sol.w).amax() <= tol) {
+        Some(same) => {
+            if open(&sol) > open(same) {
+                *same = sol;
+            }
+        }
+        None => all.push(sol),
+    }
+}
+
+/// The forces for a given combination of modes, without checking its sign conditions:
+/// the linear system of the modes' equations (the constrained dynamics of a contact set
+/// whose modes are known). `mu` has one entry per contact; `None` if the system has no
+/// solution.
+pub fn forces(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    mu: &[Real],
+    modes: &[Mode],
+) -> Option<Solution> {
+    let allowed: Vec<Allowed> = mu
+        .iter()
+        .zip(modes)
+        .map(|(&mu, m)| Allowed {
+            mu,
+            open: true,
+            slip: match *m {
+                Mode::Slide(s) => Some(s),
+                _ => None,
+            },
+        })
+        .collect();
+    let (x, w) = linear(
+        a,
+        b,
+        &allowed,
+        modes,
+        a.amax().max(Real::MIN_POSITIVE),
+        b.amax(),
+    )?;
+    Some(Solution {
+        modes: modes.to_vec(),
+        x,
+        w,
+    })
+}
+
 /// The solution for one combination of modes, if it is consistent.
 fn solve_modes(
     a: &DMatrix<Real>,
@@ -125,6 +180,40 @@ fn solve_modes(
     scale_a: Real,
     scale_b: Real,
 ) -> Option<Solution> {
+    let (x, w) = linear(a, b, allowed, modes, scale_a, scale_b)?;
+    let tol_w = TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE);
+    let tol_x = TOL * x.amax().max(Real::MIN_POSITIVE);
+    for (i, mode) in modes.iter().enumerate() {
+        let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
+        let mu = allowed[i].mu;
+        let ok = match *mode {
+            Mode::Open => wn >= -tol_w,
+            Mode::Stick => xn >= -tol_x && xt.abs() <= mu * xn + tol_x,
+            // A slip that starts needs a tangential tendency in its direction: with none,
+            // the point sticks (and both directions would pass a closed test).
+            Mode::Slide(s) => xn >= -tol_x && (allowed[i].slip.is_some() || s * wt > tol_w),
+        };
+        if !ok {
+            return None;
+        }
+    }
+    Some(Solution {
+        modes: modes.to_vec(),
+        x,
+        w,
+    })
+}
+
+/// The forces and `w` of the linear system of one combination of modes, if its equations
+/// can hold.
+fn linear(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    allowed: &[Allowed],
+    modes: &[Mode],
+    scale_a: Real,
+    scale_b: Real,
+) -> Option<(DVector<Real>, DVector<Real>)> {
     let m = 2 * modes.len();
     // One linear equation per unknown: rows of A (w = 0) or of the identity (x fixed).
     let mut lhs = DMatrix::zeros(m, m);
@@ -161,24 +250,7 @@ fn solve_modes(
         return None;
     }
     let w = a * &x + b;
-    let tol_x = TOL * x.amax().max(Real::MIN_POSITIVE);
-    for (i, mode) in modes.iter().enumerate() {
-        let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
-        let mu = allowed[i].mu;
-        let ok = match *mode {
-            Mode::Open => wn >= -tol_w,
-            Mode::Stick => xn >= -tol_x && xt.abs() <= mu * xn + tol_x,
-            Mode::Slide(s) => xn >= -tol_x && (allowed[i].slip.is_some() || s * wt >= -tol_w),
-        };
-        if !ok {
-            return None;
-        }
-    }
-    Some(Solution {
-        modes: modes.to_vec(),
-        x,
-        w,
-    })
+    Some((x, w))
 }
 
 #[cfg(test)]

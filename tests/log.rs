@@ -206,6 +206,7 @@ fn impact(k: usize) -> ImpactRecord {
         work_n,
         work_t,
         index: k as u64,
+        cause: ricochet::log::ImpactCause::Collision,
         e,
         mu,
         prescribed_work: 0.0,
@@ -271,7 +272,12 @@ fn synthetic() -> Run {
         "t_end",
         0.99,
         (state(0).energy.total, state(N_STATES - 1).energy.total),
-        ((0..3).map(|k| impact(k).delta_e).sum(), -1.25e-3, 0.0),
+        (
+            (0..3).map(|k| impact(k).delta_e).sum(),
+            -1.25e-3,
+            -0.5e-3,
+            0.0,
+        ),
         Counters {
             impacts: 3,
             steps: 1234,

@@ -73,15 +73,18 @@ impl FrameWorkspace {
     }
 }
 
-/// The contact frame of `pair` and the rows `J_n`, `J_t` (nu each) of the Jacobian of the
-/// relative velocity: `v^R·n = J_n u + v_rem·n`, `v^R·t = J_t u + v_rem·t`, i.e.
-///
-/// ```text
-/// J = J_a(P) − J_b(P'),   J_n = nᵀ J,   J_t = tᵀ J
-/// ```
-///
-/// whose entries are the paper's `v_r^R·n`, `v_r^R·t` [P, Eqs. (5), (11)]. `Ok(None)` if
-/// the shapes are farther apart than `prediction` (m). Requires
+/// How the tangent of a frame is oriented.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tangent {
+    /// Along the slip: `v^R·t ≥ 0` [P, Eq. (10)] (impacts).
+    AlongSlip,
+    /// `t = perp(n)` whatever the slip (persistent contact, where the slip is a sign).
+    Perp,
+}
+
+/// The contact frame of `pair` at its closest points, and the rows `J_n`, `J_t` of the
+/// Jacobian of the relative velocity (see [`frame_at`]), with the tangent along the slip.
+/// `Ok(None)` if the shapes are farther apart than `prediction` (m). Requires
 /// [`crate::kinematics::update_velocities`].
 pub fn contact_frame(
     model: &Model,
@@ -92,15 +95,39 @@ pub fn contact_frame(
     j_n: &mut [Real],
     j_t: &mut [Real],
 ) -> Result<Option<ContactFrame>, ContactError> {
-    let Some(PairContact {
+    match pair_contact(model, data, pair, prediction)? {
+        None => Ok(None),
+        Some(c) => frame_at(model, data, pair, c, Tangent::AlongSlip, ws, j_n, j_t).map(Some),
+    }
+}
+
+/// The contact frame of `pair` at the contact point `contact` and the rows `J_n`, `J_t`
+/// (nu each) of the Jacobian of the relative velocity: `v^R·n = J_n u + v_rem·n`,
+/// `v^R·t = J_t u + v_rem·t`, i.e.
+///
+/// ```text
+/// J = J_a(P) − J_b(P'),   J_n = nᵀ J,   J_t = tᵀ J
+/// ```
+///
+/// whose entries are the paper's `v_r^R·n`, `v_r^R·t` [P, Eqs. (5), (11)]. Requires
+/// [`crate::kinematics::update_velocities`].
+#[allow(clippy::too_many_arguments)]
+pub fn frame_at(
+    model: &Model,
+    data: &Data,
+    pair: PairId,
+    contact: PairContact,
+    tangent: Tangent,
+    ws: &mut FrameWorkspace,
+    j_n: &mut [Real],
+    j_t: &mut [Real],
+) -> Result<ContactFrame, ContactError> {
+    let PairContact {
         gap,
         point_a,
         point_b,
         normal,
-    }) = pair_contact(model, data, pair, prediction)?
-    else {
-        return Ok(None);
-    };
+    } = contact;
     let p = model
         .pair(pair)
         .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
@@ -109,7 +136,7 @@ pub fn contact_frame(
     let (vb, rem_b) = side(model, data, p.b, point_b, &mut ws.jac_b)?;
     let (v_r, v_rem) = (va - vb, rem_a - rem_b);
     let n = -normal;
-    let t = if v_r.dot(perp(n)) >= 0.0 {
+    let t = if tangent == Tangent::Perp || v_r.dot(perp(n)) >= 0.0 {
         perp(n)
     } else {
         -perp(n)
@@ -122,7 +149,7 @@ pub fn contact_frame(
         j_n[r] = n.dot(col);
         j_t[r] = t.dot(col);
     }
-    Ok(Some(ContactFrame {
+    Ok(ContactFrame {
         pair,
         gap,
         point_a,
@@ -131,7 +158,7 @@ pub fn contact_frame(
         t,
         v_r,
         v_rem,
-    }))
+    })
 }
 
 /// The velocity, remainder velocity and Jacobian of the point `p` of a collider's body;

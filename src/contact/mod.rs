@@ -10,7 +10,9 @@
 
 mod frame;
 mod gap;
+mod manifold;
 mod penetration;
 
-pub use frame::{ContactFrame, FrameWorkspace, contact_frame};
+pub use frame::{ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at};
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
+pub use manifold::{ContactPoints, ManifoldWorkspace, contact_points};

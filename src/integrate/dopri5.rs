@@ -386,8 +386,9 @@ impl Dopri5 {
         sys: &mut S,
     ) -> Result<Real, IntegrateError<S::Error>> {
         let (rtol, atol) = (self.settings.rtol, self.settings.atol);
-        let dnf = scaled_sq(&self.f, &self.y, rtol, atol);
-        let dny = scaled_sq(&self.y, &self.y, rtol, atol);
+        let m = sys.controlled().min(self.n);
+        let dnf = scaled_sq(&self.f[..m], &self.y[..m], rtol, atol);
+        let dny = scaled_sq(&self.y[..m], &self.y[..m], rtol, atol);
         let mut h = if dnf <= 1e-10 || dny <= 1e-10 {
             1e-6
         } else {
@@ -408,7 +409,7 @@ impl Dopri5 {
         for i in 0..self.n {
             self.st.err[i] = self.st.k2[i] - self.f[i];
         }
-        let der2 = scaled_sq(&self.st.err, &self.y, rtol, atol).sqrt() / h;
+        let der2 = scaled_sq(&self.st.err[..m], &self.y[..m], rtol, atol).sqrt() / h;
         let der12 = der2.abs().max(dnf.sqrt());
         let h1 = if der12 <= 1e-15 || !der12.is_finite() {
             (h * 1e-3).max(1e-6)
@@ -465,10 +466,11 @@ impl Stepper for Dopri5 {
                 &mut self.counters,
             )?;
             let err = if all_finite(&self.st.y_new) {
+                let m = sys.controlled().min(self.n);
                 error_norm(
-                    &self.st.err,
-                    &self.y,
-                    &self.st.y_new,
+                    &self.st.err[..m],
+                    &self.y[..m],
+                    &self.st.y_new[..m],
                     self.settings.rtol,
                     self.settings.atol,
                 )

@@ -20,6 +20,14 @@ pub trait OdeSystem {
 
     /// Writes `f(t, y)` into `dy` (both of length `n`).
     fn rhs(&mut self, t: Real, y: &[Real], dy: &mut [Real]) -> Result<(), Self::Error>;
+
+    /// How many leading components of `y` the step-size control weighs (default: all).
+    /// Quadratures appended after them — running integrals of functions of the others,
+    /// such as the works of an energy audit — may be left out: their accuracy follows from
+    /// the others', and zero components would only dilute the RMS error norm.
+    fn controlled(&self) -> usize {
+        self.dim()
+    }
 }
 
 /// An [`OdeSystem`] made of a closure `f(t, y, dy)` that cannot fail (tests, benches,

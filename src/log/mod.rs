@@ -39,7 +39,8 @@ pub use foxglove::{
 };
 pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
 pub use records::{
-    Audit, ContactMode, ContactState, Counters, Energy, ImpactRecord, Planar, StateRecord,
+    Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
+    StateRecord,
 };
 pub use run::RunLogger;
 pub use schemas::Topic;

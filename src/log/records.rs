@@ -190,6 +190,35 @@ pub struct Planar {
     pub y: f64,
 }
 
+/// Why an impulse was applied (the `cause` of an impact record).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ImpactCause {
+    /// One contact point approaching: the scene's one-point law.
+    #[default]
+    Collision,
+    /// Several points at once: Moreau's generalized Newton law.
+    Simultaneous,
+    /// Painlevé's inconsistency resolved by an impact without collision.
+    WithoutCollision,
+    /// The closing impulse at the end of an accumulation of impacts (`i_n` may be
+    /// negative).
+    AccumulationEnd,
+}
+
+impl ImpactCause {
+    /// The name used in logs: `collision`, `simultaneous`, `without_collision`,
+    /// `accumulation_end`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ImpactCause::Collision => "collision",
+            ImpactCause::Simultaneous => "simultaneous",
+            ImpactCause::WithoutCollision => "without_collision",
+            ImpactCause::AccumulationEnd => "accumulation_end",
+        }
+    }
+}
+
 /// One entry of the impact ledger (`ricochet.Impact` on `/impacts`).
 ///
 /// The fields up to `work_t` are the contract of `DESIGN.md`; the rest are additions.
@@ -228,7 +257,8 @@ pub struct ImpactRecord {
     pub v_a: ContactVelocity,
     /// Velocity of separation `v^S` in the contact frame (m/s) [P, Eq. (21)].
     pub v_s: ContactVelocity,
-    /// Normal impulse `I_n ≥ 0` (N·s) [P, Eq. (13)].
+    /// Normal impulse `I_n` (N·s) [P, Eq. (13)]: `≥ 0`, except for a closing impulse
+    /// (`cause` `accumulation_end`).
     pub i_n: f64,
     /// Tangential impulse `I_t` (N·s) [P, Eq. (13)].
     pub i_t: f64,
@@ -247,6 +277,10 @@ pub struct ImpactRecord {
     pub work_t: f64,
     /// Index of the impact in the run, from 0.
     pub index: u64,
+    /// Why the impulse was applied (absent from logs written before it existed, whose
+    /// impacts were all collisions).
+    #[serde(default)]
+    pub cause: ImpactCause,
     /// Coefficient of restitution used by the law (dimensionless).
     pub e: f64,
     /// Coefficient of friction `μ` used by the law (dimensionless).
@@ -328,9 +362,9 @@ pub struct Counters {
 
 /// The energy audit of a run, written as the `audit` metadata record when the run ends.
 ///
-/// The balance is `E_end − E_0 = impact_delta_e + applied_work + prescribed_work +
-/// integration_drift`: whatever the bookkeeping does not explain is drift of the
-/// integrator (or a bug).
+/// The balance is `E_end − E_0 = impact_delta_e + applied_work + contact_work +
+/// prescribed_work + integration_drift`: whatever the bookkeeping does not explain is drift
+/// of the integrator (or a bug).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Audit {
     /// Why the run stopped: `t_end` when it reached its end time, `interrupted` on Ctrl-C,
@@ -346,10 +380,14 @@ pub struct Audit {
     pub impact_delta_e: f64,
     /// Work of dampers and applied non-conservative forces between impacts (J).
     pub applied_work: f64,
+    /// Work of the forces of contacts in persistent contact (J): friction of sliding
+    /// contacts. Absent from logs written before persistent contact existed (zero).
+    #[serde(default)]
+    pub contact_work: f64,
     /// Work of prescribed (rheonomic) motion, including its share at impacts (J).
     pub prescribed_work: f64,
-    /// `E_end − E_0 − (impact_delta_e + applied_work + prescribed_work)` (J): the energy
-    /// the bookkeeping does not explain. Set by [`Audit::new`].
+    /// `E_end − E_0 − (impact_delta_e + applied_work + contact_work + prescribed_work)`
+    /// (J): the energy the bookkeeping does not explain. Set by [`Audit::new`].
     pub integration_drift: f64,
     /// Work counters.
     pub counters: Counters,
@@ -361,10 +399,10 @@ impl Audit {
         stop_reason: impl Into<String>,
         t_stop: f64,
         (energy_initial, energy_final): (f64, f64),
-        (impact_delta_e, applied_work, prescribed_work): (f64, f64, f64),
+        (impact_delta_e, applied_work, contact_work, prescribed_work): (f64, f64, f64, f64),
         counters: Counters,
     ) -> Audit {
-        let explained = impact_delta_e + applied_work + prescribed_work;
+        let explained = impact_delta_e + applied_work + contact_work + prescribed_work;
         Audit {
             stop_reason: stop_reason.into(),
             t_stop,
@@ -372,6 +410,7 @@ impl Audit {
             energy_final,
             impact_delta_e,
             applied_work,
+            contact_work,
             prescribed_work,
             integration_drift: energy_final - energy_initial - explained,
             counters,
@@ -386,6 +425,7 @@ impl Audit {
             ("energy_final", self.energy_final),
             ("impact_delta_e", self.impact_delta_e),
             ("applied_work", self.applied_work),
+            ("contact_work", self.contact_work),
             ("prescribed_work", self.prescribed_work),
             ("integration_drift", self.integration_drift),
         ])
@@ -423,11 +463,11 @@ mod tests {
             "t_end",
             2.0,
             (10.0, 7.0),
-            (-2.5, -0.25, 0.0),
+            (-2.5, -0.25, -0.125, 0.0),
             Counters::default(),
         );
-        // 7 − 10 − (−2.5 − 0.25 + 0) = −0.25
-        assert_eq!(a.integration_drift, -0.25);
+        // 7 − 10 − (−2.5 − 0.25 − 0.125 + 0) = −0.125
+        assert_eq!(a.integration_drift, -0.125);
     }
 
     #[test]

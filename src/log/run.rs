@@ -8,14 +8,15 @@ use serde::Serialize;
 use super::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
 use super::foxglove::{Color, Pose as FoxglovePose, Time};
 use super::{
-    Audit, ContactMode, ContactState, Counters, Energy, FrameTransforms, ImpactRecord, LogError,
-    LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
+    Audit, ContactMode, ContactState, Counters, Energy, FrameTransforms, ImpactCause, ImpactRecord,
+    LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
 };
 use crate::math::{Real, Vec2};
 use crate::model::Model;
 use crate::settings::Settings;
 use crate::sim::{
-    ImpactEvent, Level, MaterialOverride, Observer, ObserverError, RunSummary, Sample, StopReason,
+    ImpactEvent, Level, MaterialOverride, Observer, ObserverError, PairMode, RunSummary, Sample,
+    StopReason,
 };
 
 /// Colours of the bodies, in body order (cycled).
@@ -129,6 +130,7 @@ impl<W: Write + Seek> RunLogger<W> {
             (
                 a.impact_delta_e,
                 a.damping_work + a.applied_work,
+                a.contact_work,
                 a.impact_prescribed_work + a.drive_work,
             ),
             Counters {
@@ -197,11 +199,15 @@ impl<W: Write + Seek> Observer for RunLogger<W> {
         rec.u.clear();
         rec.u.extend_from_slice(s.u);
         rec.energy = Energy::new(s.energy.kinetic, s.energy.potential);
-        for (c, &gap) in rec.contacts.iter_mut().zip(s.gaps) {
+        for ((c, &gap), mode) in rec.contacts.iter_mut().zip(s.gaps).zip(s.modes) {
             c.mode = if s.at_impact && gap <= self.gap_tol {
                 ContactMode::Impact
             } else {
-                ContactMode::Free
+                match mode {
+                    PairMode::Free => ContactMode::Free,
+                    PairMode::Sticking => ContactMode::Sticking,
+                    PairMode::Sliding => ContactMode::Sliding,
+                }
             };
             c.mode_code = c.mode.code();
             c.gap = gap;
@@ -254,6 +260,12 @@ impl<W: Write + Seek> Observer for RunLogger<W> {
             work_n: out.work_n,
             work_t: out.work_t,
             index: ev.index,
+            cause: match ev.cause {
+                crate::sim::ImpactCause::Collision => ImpactCause::Collision,
+                crate::sim::ImpactCause::Simultaneous => ImpactCause::Simultaneous,
+                crate::sim::ImpactCause::WithoutCollision => ImpactCause::WithoutCollision,
+                crate::sim::ImpactCause::AccumulationEnd => ImpactCause::AccumulationEnd,
+            },
             e: ev.material.e,
             mu: ev.material.mu,
             prescribed_work: ev.prescribed_work(),

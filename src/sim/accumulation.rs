@@ -1,5 +1,5 @@
-//! The scales of a scene for its tolerances, and the guard that stops a run when a
-//! contact no longer separates (until persistent contact is modelled).
+//! The scales of a scene for its tolerances, and the guard that stops a run whose impacts
+//! stall.
 
 use crate::math::Real;
 use crate::model::Model;
@@ -16,10 +16,14 @@ pub struct Scales {
     pub speed: Real,
     /// A contact is closed when its gap is at most `gap_tol = 1e-9 L` (m).
     pub gap_tol: Real,
-    /// A closed contact approaches when `v_n < −v_tiny`, `v_tiny = 1e-10 v_ref` (m/s).
+    /// A touching contact approaches when `v_n < −v_tiny`, `v_tiny = 1e-10 v_ref` (m/s).
     pub v_tiny: Real,
-    /// An impact that leaves the contact separating slower than `v_rest` (m/s) ends the
-    /// bouncing: the contact has come to rest (an accumulation of impacts). The next hop
+    /// A point held closed in persistent contact approaches (or separates) only when
+    /// `|v_n| > v_drift = 1e-7 v_ref` (m/s): its normal speed is held at zero through its
+    /// acceleration, and drifts with the integration error.
+    pub v_drift: Real,
+    /// An impact that would leave the contact separating slower than `v_rest` (m/s) ends
+    /// the bouncing: the contact comes to rest (an accumulation of impacts). The next hop
     /// would rise `v²/(2a)` with `a = |g|`: `v_rest` makes that 100 times the position
     /// tolerance of the integrator, `δ = atol + rtol L`, below which the event location
     /// cannot tell a hop from rounding: `v_rest = √(2 a · 100 δ)`.
@@ -46,6 +50,7 @@ impl Scales {
             speed,
             gap_tol: 1e-9 * length,
             v_tiny: 1e-10 * speed,
+            v_drift: 1e-7 * speed,
             v_rest: (2.0 * accel * 100.0 * delta).sqrt(),
         }
     }
@@ -57,17 +62,19 @@ const MAX_STALLED_IMPACTS: u32 = 1000;
 /// Watches the impacts for a contact that no longer separates.
 #[derive(Clone, Debug)]
 pub(super) struct Guard {
-    scales: Scales,
     last_t: Real,
     stalled: u32,
+    last_event_t: Real,
+    stalled_events: u32,
 }
 
 impl Guard {
-    pub(super) fn new(scales: Scales) -> Self {
+    pub(super) fn new() -> Self {
         Self {
-            scales,
             last_t: Real::NEG_INFINITY,
             stalled: 0,
+            last_event_t: Real::NEG_INFINITY,
+            stalled_events: 0,
         }
     }
 
@@ -75,22 +82,27 @@ impl Guard {
     pub(super) fn reset(&mut self, t0: Real) {
         self.last_t = t0;
         self.stalled = 0;
+        self.last_event_t = t0;
+        self.stalled_events = 0;
     }
 
-    /// After an impact at `t` leaving the normal separation speed `v_s_n`: why
-    /// the run must stop, if it must.
-    ///
-    /// Two signs of an accumulation: the separation speed is below the resting speed
-    /// `v_rest` (the flights that follow would be shorter than the integrator can resolve,
-    /// and infinitely many), or impacts keep coming without the time advancing.
-    pub(super) fn after_impact(&mut self, t: Real, v_s_n: Real) -> Option<String> {
-        if v_s_n <= self.scales.v_rest {
-            return Some(format!(
-                "the contact separates at {v_s_n:.3e} m/s after the impact, below the resting \
-                 speed {:.1e} m/s: it comes to rest",
-                self.scales.v_rest
-            ));
+    /// After an event at `t`: why the run must stop, if events keep coming without the time
+    /// advancing (contact modes that chatter).
+    pub(super) fn after_event(&mut self, t: Real) -> Option<String> {
+        if t - self.last_event_t <= 1e-12 * (1.0 + t.abs()) {
+            self.stalled_events += 1;
+        } else {
+            self.stalled_events = 0;
         }
+        self.last_event_t = t;
+        (self.stalled_events >= MAX_STALLED_IMPACTS)
+            .then(|| format!("{MAX_STALLED_IMPACTS} events without the time advancing"))
+    }
+
+    /// After an impact at `t`: why the run must stop, if it must — impacts keep coming
+    /// without the time advancing (accumulations themselves pass to persistent contact in
+    /// the contact stage).
+    pub(super) fn after_impact(&mut self, t: Real) -> Option<String> {
         if t - self.last_t <= 1e-12 * (1.0 + t.abs()) {
             self.stalled += 1;
         } else {

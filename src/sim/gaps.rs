@@ -1,38 +1,142 @@
-//! The signed gaps of the contact pairs as the event functions of the integrator.
+//! The event functions of the loop: the gaps of open contacts, and the forces and slips of
+//! closed ones.
 
-use crate::contact::{ContactError, pair_contact, signed_gap};
+use super::persistent::{Hold, Persistent, PointScratch};
+use super::{AtTime, Nested, Scales};
+use crate::contact::{PairContact, pair_contact, signed_gap};
+use crate::dynamics::forward_dynamics;
 use crate::events::EventFunctions;
 use crate::kinematics::{point_velocity, update_positions, update_velocities};
 use crate::math::{Real, Vec2};
 use crate::model::{Model, PairId};
 use crate::state::Data;
 
-/// `gᵢ(t, y)`: the signed gap of contact pair `i` at `q = y[..n]` (m), and its rate
-/// `ġᵢ = v^R·n` (m/s), the normal relative velocity of the closest points.
+/// Event functions per contact pair.
+pub const SLOTS: usize = 7;
+
+/// The slot of an event function: for pair `k`, slot `SLOTS·k + s`.
+///
+/// | s | function | armed when | its event |
+/// |---|---|---|---|
+/// | 0 | the signed gap (m) | no point of the pair is closed | an impact |
+/// | 0 | the gap at the pair's other point (m) | one point is closed | an impact there |
+/// | 1 + 3j | `λ_n` of closed point j (N) | point j is closed | lift-off |
+/// | 2 + 3j | `μ λ_n − |λ_t|` (N) | point j sticks | it starts to slip |
+/// | 2 + 3j | `s V_t` (m/s) | point j slides with slip s | the slip stops |
+/// | 3 + 3j | the Painlevé coefficient (1/kg) | point j slides | sliding cannot be held |
+///
+/// Every event is a closing crossing (`> 0` to `≤ 0`). `j` is the rank of the point among
+/// the closed points of its pair, in the order of [`Persistent::closed`].
+pub fn slot(pair: PairId, s: usize) -> usize {
+    SLOTS * pair.index() + s
+}
+
+/// The rank of closed point `i` among the closed points of its pair.
+pub fn rank(persistent: &Persistent, i: usize) -> usize {
+    let closed = persistent.closed();
+    closed[..i]
+        .iter()
+        .filter(|c| c.pair == closed[i].pair)
+        .count()
+}
+
+/// The event functions `gᵢ(t, y)` of a model: see [`slot`].
 pub struct GapFunctions<'m> {
     model: &'m Model,
     data: Data,
+    /// The closed contact points, in sync with the ODE system's.
+    pub persistent: Persistent,
+    scratch: PointScratch,
+    scales: Scales,
 }
 
 impl<'m> GapFunctions<'m> {
-    /// The gaps of every contact pair of `model`, in pair order.
-    pub fn new(model: &'m Model) -> Self {
+    /// The event functions of `model`, with no closed contact point.
+    pub fn new(model: &'m Model, scales: Scales) -> Self {
         Self {
             model,
             data: Data::new(model),
+            persistent: Persistent::new(model, scales),
+            scratch: PointScratch::new(model),
+            scales,
         }
     }
 }
 
-impl EventFunctions for GapFunctions<'_> {
-    type Error = ContactError;
-
-    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), ContactError> {
+impl GapFunctions<'_> {
+    /// The function of slot 0 of `pair` at `(t, y)`: the gap, or with one closed point
+    /// the gap at the pair's other point (m); see [`slot`].
+    pub fn open_gap(&mut self, pair: PairId, t: Real, y: &[Real]) -> Result<Real, Nested> {
         let n = self.model.nq();
-        update_positions(self.model, &mut self.data, t, &y[..n])?;
-        for (k, gk) in g.iter_mut().enumerate() {
-            *gk = signed_gap(self.model, &self.data, PairId(k), Real::INFINITY)?
-                .unwrap_or(Real::INFINITY);
+        update_positions(self.model, &mut self.data, t, &y[..n])
+            .map_err(|e| Nested::from(e.at(t)))?;
+        self.open_gap_here(pair, t)
+    }
+
+    /// The other point of a pair with one closed point at `local`: of its (at most two)
+    /// candidates, the one farther from the closed point (which moves on `a` as it slides
+    /// or rolls). At the positions of `self.data`.
+    fn other_point(&mut self, pair: PairId, local: Vec2) -> Result<Option<PairContact>, Nested> {
+        let candidates =
+            self.scratch
+                .candidates(self.model, &self.data, pair, self.scales.length)?;
+        Ok(match candidates.as_slice() {
+            [x, y] if (x.1 - local).length() <= (y.1 - local).length() => Some(y.0),
+            [x, _] => Some(x.0),
+            _ => None,
+        })
+    }
+
+    /// [`Self::open_gap`] at the positions of `self.data`.
+    fn open_gap_here(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
+        let model = self.model;
+        let closed = self.persistent.closed();
+        let mut on_pair = closed.iter().filter(|c| c.pair == pair);
+        let (first, second) = (on_pair.next().map(|c| c.local), on_pair.next());
+        Ok(match (first, second) {
+            (None, _) => signed_gap(model, &self.data, pair, Real::INFINITY)
+                .map_err(|e| Nested::from(e.at(t)))?
+                .unwrap_or(self.scales.length),
+            (Some(local), None) => match self.other_point(pair, local)? {
+                Some(c) => c.gap,
+                None => self.scales.length,
+            },
+            (Some(_), Some(_)) => self.scales.length,
+        })
+    }
+}
+
+impl EventFunctions for GapFunctions<'_> {
+    type Error = Nested;
+
+    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
+        let model = self.model;
+        let n = model.nq();
+        let (q, u) = (&y[..n], &y[n..2 * n]);
+        // Unarmed functions hold a positive value.
+        g.fill(self.scales.length);
+        if self.persistent.closed().is_empty() {
+            update_positions(model, &mut self.data, t, q).map_err(|e| Nested::from(e.at(t)))?;
+        } else {
+            forward_dynamics(model, &mut self.data, t, q, u).map_err(|e| Nested::from(e.at(t)))?;
+            self.persistent
+                .accelerate(model, &mut self.data, (t, q, u))?;
+        }
+        for k in 0..model.pairs().len() {
+            let pair = PairId(k);
+            g[slot(pair, 0)] = self.open_gap_here(pair, t)?;
+        }
+        for i in 0..self.persistent.closed().len() {
+            let c = self.persistent.closed()[i];
+            let j = rank(&self.persistent, i);
+            let (lambda_n, lambda_t) = self.persistent.force(i);
+            let mu = self.persistent.mu(i);
+            g[slot(c.pair, 1 + 3 * j)] = lambda_n;
+            g[slot(c.pair, 2 + 3 * j)] = match c.hold {
+                Hold::Stick => mu * lambda_n - lambda_t.abs(),
+                Hold::Slide(s) => s * self.persistent.points()[i].v_t,
+            };
+            g[slot(c.pair, 3 + 3 * j)] = self.persistent.painleve(i).min(self.scales.length);
         }
         Ok(())
     }
@@ -43,23 +147,37 @@ impl EventFunctions for GapFunctions<'_> {
         y: &[Real],
         _dy: &[Real],
         g_dot: &mut [Real],
-    ) -> Result<bool, ContactError> {
-        let n = self.model.nq();
-        update_positions(self.model, &mut self.data, t, &y[..n])?;
-        update_velocities(self.model, &mut self.data, &y[n..2 * n])?;
-        for (k, gd) in g_dot.iter_mut().enumerate() {
+    ) -> Result<bool, Nested> {
+        // The rates of the gaps: the normal relative velocity of their points. The force,
+        // slip and Painlevé functions get a zero rate: the locator finds their sign changes
+        // at its samples, not a dip below zero and back between two of them (which would
+        // take a difference of the constrained dynamics at every search iteration).
+        let model = self.model;
+        let n = model.nq();
+        update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
+        update_velocities(model, &mut self.data, &y[n..2 * n])
+            .map_err(|e| Nested::from(e.at(t)))?;
+        g_dot.fill(0.0);
+        for k in 0..model.pairs().len() {
             let pair = PairId(k);
-            *gd = match pair_contact(self.model, &self.data, pair, Real::INFINITY)? {
+            let closed = self.persistent.closed();
+            let mut on_pair = closed.iter().filter(|c| c.pair == pair);
+            let contact = match (on_pair.next().map(|c| c.local), on_pair.next()) {
+                (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
+                    .map_err(|e| Nested::from(e.at(t)))?,
+                (Some(local), None) => self.other_point(pair, local)?,
+                (Some(_), Some(_)) => None,
+            };
+            g_dot[slot(pair, 0)] = match contact {
                 Some(c) => {
-                    let p = &self.model.pairs()[k];
-                    let v = |collider: crate::model::ColliderId, at: Vec2| match self
-                        .model
-                        .colliders()[collider.index()]
+                    let p = &model.pairs()[k];
+                    let v = |collider: crate::model::ColliderId, at: Vec2| match model.colliders()
+                        [collider.index()]
                     .body
                     {
-                        Some(body) => {
-                            point_velocity(self.model, &self.data, body, at).map(|v| v.total)
-                        }
+                        Some(body) => point_velocity(model, &self.data, body, at)
+                            .map(|v| v.total)
+                            .map_err(|e| Nested::from(e.at(t))),
                         None => Ok(Vec2::ZERO),
                     };
                     (v(p.b, c.point_b)? - v(p.a, c.point_a)?).dot(c.normal)

@@ -1,10 +1,18 @@
 //! The impact map of one contact pair: the contact frame, `W = J M⁻¹ Jᵀ`, the impact law
 //! and the jump of the generalized speeds.
 
-use crate::contact::{ContactFrame, FrameWorkspace, contact_frame};
+use nalgebra::{DMatrix, DVector};
+
+use crate::contact::{
+    ContactFrame, FrameWorkspace, PairContact, Tangent, contact_frame, frame_at, pair_contact,
+};
 use crate::dynamics::{Energy, energy, factor_mass_matrix, mass_matrix, solve_mass};
-use crate::impact::{self, ContactVelocity, ImpactMatrix, ImpactProblem, Law, Outcome};
+use crate::impact::{
+    self, Coefficients, CollisionType, ContactVelocity, ImpactMatrix, ImpactProblem, Impulse, Law,
+    Outcome, Phases, energy_change,
+};
 use crate::kinematics::{update_positions, update_velocities};
+use crate::lcp::{self, Allowed, Mode};
 use crate::math::Real;
 use crate::model::{Material, Model, PairId};
 use crate::state::Data;
@@ -55,11 +63,42 @@ impl MaterialOverride {
     }
 }
 
+/// Why an impulse was applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImpactCause {
+    /// One contact point approaching: the scene's one-point law [P].
+    Collision,
+    /// Several contact points at once, or an impact that made another touching point
+    /// approach: Moreau's generalized Newton law ([`ImpactMap::apply_many`]).
+    Simultaneous,
+    /// Painlevé's inconsistency: the one-point law in its grazing limit, an impact without
+    /// collision ([`ImpactMap::apply_at`] with a floor).
+    WithoutCollision,
+    /// The end of an accumulation of impacts: the closing impulse that brings the touching
+    /// points to rest ([`ImpactMap::close`]); its normal impulse may be negative.
+    AccumulationEnd,
+}
+
+impl ImpactCause {
+    /// The name used in logs: `collision`, `simultaneous`, `without_collision`,
+    /// `accumulation_end`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ImpactCause::Collision => "collision",
+            ImpactCause::Simultaneous => "simultaneous",
+            ImpactCause::WithoutCollision => "without_collision",
+            ImpactCause::AccumulationEnd => "accumulation_end",
+        }
+    }
+}
+
 /// What one impact did: an entry of the impact ledger.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImpactEvent {
     /// Index of the impact in the run, from 0.
     pub index: u64,
+    /// Why the impulse was applied.
+    pub cause: ImpactCause,
     /// Time of the impact (s).
     pub t: Real,
     /// The contact frame at the impact (before the jump).
@@ -150,8 +189,80 @@ impl ImpactMap {
         })
     }
 
-    /// Applies the impact of `pair` at `(t, q, u)`: `u` becomes `u⁺`. Returns `None` (and
-    /// leaves `u`) if the points do not approach (`v_n^A ≥ 0`).
+    /// The frame (tangent along the slip) of `pair` at its contact point `contact`, at
+    /// `(t, q, u)`; its rows are left in `j_n`, `j_t`.
+    fn frame_at_point(
+        &mut self,
+        model: &Model,
+        point: (PairId, PairContact),
+        t: Real,
+        q: &[Real],
+        u: &[Real],
+    ) -> Result<ContactFrame, SimError> {
+        self.frame_with(model, point, Tangent::AlongSlip, (t, q, u))
+    }
+
+    /// The frame (tangent `perp(n)`) of `pair` at its contact point `contact`, at
+    /// `(t, q, u)`.
+    pub fn frame_perp(
+        &mut self,
+        model: &Model,
+        point: (PairId, PairContact),
+        t: Real,
+        q: &[Real],
+        u: &[Real],
+    ) -> Result<ContactFrame, SimError> {
+        self.frame_with(model, point, Tangent::Perp, (t, q, u))
+    }
+
+    fn frame_with(
+        &mut self,
+        model: &Model,
+        (pair, contact): (PairId, PairContact),
+        tangent: Tangent,
+        (t, q, u): (Real, &[Real], &[Real]),
+    ) -> Result<ContactFrame, SimError> {
+        update_positions(model, &mut self.data, t, q).map_err(|e| SimError::at(t, e))?;
+        update_velocities(model, &mut self.data, u).map_err(|e| SimError::at(t, e))?;
+        frame_at(
+            model,
+            &self.data,
+            pair,
+            contact,
+            tangent,
+            &mut self.frame_ws,
+            &mut self.j_n,
+            &mut self.j_t,
+        )
+        .map_err(|e| SimError::at(t, e))
+    }
+
+    /// Applies the impact of `pair` at its closest points at `(t, q, u)`: see
+    /// [`ImpactMap::apply_at`].
+    pub fn apply(
+        &mut self,
+        model: &Model,
+        pair: PairId,
+        material: Material,
+        t: Real,
+        q: &[Real],
+        u: &mut [Real],
+    ) -> Result<Option<ImpactEvent>, SimError> {
+        update_positions(model, &mut self.data, t, q).map_err(|e| SimError::at(t, e))?;
+        let contact = pair_contact(model, &self.data, pair, Real::INFINITY)
+            .map_err(|e| SimError::at(t, e))?
+            .ok_or(SimError::Contact {
+                t,
+                message: format!("pair #{} has no closest points", pair.index()),
+            })?;
+        self.apply_at(model, (pair, contact), material, None, t, q, u)
+    }
+
+    /// Applies the one-point impact of `pair` at its contact point `contact` at
+    /// `(t, q, u)`: `u` becomes `u⁺`. Returns `None` (and leaves `u`) if the points do
+    /// not approach (`v_n^A ≥ 0`), unless `approach_floor = Some(δ)`: then a normal
+    /// velocity above `−δ` is taken as `−δ` (the grazing limit, an impact without
+    /// collision: the law's impulses stay finite as `v_n^A → 0⁻`).
     ///
     /// The stages of [P, Sects. 2–4]:
     /// 1. the contact frame and `J_n`, `J_t` (the rows `v_r^R·n`, `v_r^R·t`);
@@ -162,20 +273,25 @@ impl ImpactMap {
     ///
     /// The energies before and after come from the model, so the ledger can check them
     /// against ΔE of Eq. (29).
-    pub fn apply(
+    #[allow(clippy::too_many_arguments)]
+    pub fn apply_at(
         &mut self,
         model: &Model,
-        pair: PairId,
+        (pair, contact): (PairId, PairContact),
         material: Material,
+        approach_floor: Option<Real>,
         t: Real,
         q: &[Real],
         u: &mut [Real],
     ) -> Result<Option<ImpactEvent>, SimError> {
         // 1. Contact frame, velocity of approach.
-        let frame = self.frame(model, pair, t, q, u)?;
-        let v_a = ContactVelocity::new(frame.v_n(), frame.v_t());
-        if v_a.n >= 0.0 {
-            return Ok(None);
+        let frame = self.frame_at_point(model, (pair, contact), t, q, u)?;
+        let actual = ContactVelocity::new(frame.v_n(), frame.v_t());
+        let mut v_a = actual;
+        match approach_floor {
+            Some(delta) if v_a.n > -delta => v_a.n = -delta,
+            None if v_a.n >= 0.0 => return Ok(None),
+            _ => {}
         }
         // 2. W = J M⁻¹ Jᵀ.
         mass_matrix(model, &mut self.data);
@@ -192,12 +308,21 @@ impl ImpactMap {
         );
         // 3. The impact law.
         let problem = ImpactProblem::new(w, v_a, material.e, material.mu);
-        let outcome = impact::solve(material.law, &problem).map_err(|source| SimError::Impact {
-            t,
-            pair: pair.index(),
-            name: pair_name(model, pair),
-            source,
-        })?;
+        let mut outcome =
+            impact::solve(material.law, &problem).map_err(|source| SimError::Impact {
+                t,
+                pair: pair.index(),
+                name: pair_name(model, pair),
+                source,
+            })?;
+        if v_a != actual {
+            // Floored: the law ran on v^A = (−δ, v_t); the jump W I applies to the actual
+            // velocity, and Eq. (29) is that of the actual velocities (the model's energy
+            // change), ΔE = ½ [I_n (v_n^A + v_n^S) + I_t (v_t^A + v_t^S)].
+            outcome.v_s = ContactVelocity::new(outcome.v_s.n + actual.n - v_a.n, outcome.v_s.t);
+            outcome.delta_e = energy_change(outcome.impulse, actual, outcome.v_s);
+            v_a = actual;
+        }
         // 4. Δu = M⁻¹ Jᵀ I.
         let energy_before =
             energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
@@ -212,6 +337,11 @@ impl ImpactMap {
             energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
         Ok(Some(ImpactEvent {
             index: 0,
+            cause: if approach_floor.is_some() {
+                ImpactCause::WithoutCollision
+            } else {
+                ImpactCause::Collision
+            },
             t,
             frame,
             material,
@@ -223,6 +353,279 @@ impl ImpactMap {
             energy_after,
         }))
     }
+
+    /// Applies the impacts of several contact points at once at `(t, q, u)`: `u` becomes
+    /// `u⁺`; one ledger entry per point that receives an impulse.
+    ///
+    /// The one-point laws of [P] do not apply to several contacts. DEVIATION (a law beyond
+    /// the paper): Moreau's generalized Newton law with Coulomb friction, the velocity-level
+    /// complementarity problem over all the points (closed ones included, with `v_n⁻ ≈ 0`),
+    ///
+    /// ```text
+    /// v⁺ = v⁻ + W P,   v_n⁺ + e v_n⁻ ≥ 0 ⊥ P_n ≥ 0,   |P_t| ≤ μ P_n (stick or slip by v_t⁺)
+    /// ```
+    ///
+    /// with `W = J M⁻¹ Jᵀ` over all the points (2k × 2k), solved exactly by enumeration
+    /// ([`crate::lcp::solve`]); then `Δu = M⁻¹ Jᵀ P`. Each entry reports the point's own
+    /// 2×2 block of `W`, its velocities and impulses, the type of its final slip, Eq. (29)
+    /// and the works along the straight path (`Phases::straight`); the law is reported as
+    /// Newton's. The energies before and after each entry add up the points' Eq. (29) in
+    /// order; the last entry closes on the model's energy after the impact.
+    pub fn apply_many(
+        &mut self,
+        model: &Model,
+        points: &[(PairId, PairContact, Material)],
+        t: Real,
+        q: &[Real],
+        u: &mut [Real],
+    ) -> Result<Vec<ImpactEvent>, SimError> {
+        let k = points.len();
+        let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
+        // The complementarity problem: w = W P + b with b_n = (1 + e) v_n⁻, b_t = v_t⁻.
+        let mut b = DVector::zeros(2 * k);
+        let mut allowed = Vec::with_capacity(k);
+        for (i, &(_, _, m)) in points.iter().enumerate() {
+            b[2 * i] = (1.0 + m.e) * set.v[2 * i];
+            b[2 * i + 1] = set.v[2 * i + 1];
+            allowed.push(Allowed {
+                mu: m.mu,
+                open: true,
+                slip: None,
+            });
+        }
+        let solutions = lcp::solve(&set.w, &b, &allowed).all;
+        let Some(sol) = solutions.first() else {
+            return Err(SimError::Contact {
+                t,
+                message: format!(
+                    "the simultaneous impact of {k} contact points has no solution under the \
+                     generalized Newton law"
+                ),
+            });
+        };
+        let materials: Vec<Material> = points.iter().map(|p| p.2).collect();
+        self.jump(
+            model,
+            ImpactCause::Simultaneous,
+            &set,
+            &materials,
+            &sol.x,
+            &sol.modes,
+            t,
+            q,
+            u,
+        )
+    }
+
+    /// Ends an accumulation of impacts (Zeno): brings every point of `points` to rest in
+    /// the normal direction, `v_n⁺ = 0`, and in the tangential one too where it barely slips
+    /// (`|v_t⁻| ≤ v_stop`) and has friction, at `(t, q, u)`; `u` becomes `u⁺`. One ledger
+    /// entry per point with an impulse (reported with `e = 0`).
+    ///
+    /// DEVIATION (a truncation beyond the paper): when the hops of an accumulation fall
+    /// below what the event location resolves, the infinitely many impacts left are
+    /// replaced by one plastic impulse over the touching points, the least-squares
+    /// solution of
+    ///
+    /// ```text
+    /// W_rr P_r = −v_r⁻   (r: the normal rows, and the tangential rows of the points that
+    ///                     stop; W = J M⁻¹ Jᵀ; the other impulses are zero)
+    /// ```
+    ///
+    /// whose impulses may be of either sign and lie outside the friction cone: a rocking
+    /// body whose lifting corner separates at `v_n ≤ v_rest` is pulled down (`P_n < 0`).
+    /// What it removes is the energy of the hops left, of the order of `m v_rest²`, and it
+    /// is in the ledger.
+    pub fn close(
+        &mut self,
+        model: &Model,
+        points: &[(PairId, PairContact, Material)],
+        v_stop: Real,
+        t: Real,
+        q: &[Real],
+        u: &mut [Real],
+    ) -> Result<Vec<ImpactEvent>, SimError> {
+        let k = points.len();
+        let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
+        let rows: Vec<usize> = (0..2 * k)
+            .filter(|&r| r % 2 == 0 || (points[r / 2].2.mu > 0.0 && set.v[r].abs() <= v_stop))
+            .collect();
+        let m = rows.len();
+        let w_rr = DMatrix::from_fn(m, m, |i, j| set.w[(rows[i], rows[j])]);
+        let rhs = DVector::from_fn(m, |i, _| -set.v[rows[i]]);
+        let svd = w_rr.svd(true, true);
+        let tol = Real::EPSILON * m as Real * svd.singular_values.max();
+        let p_r = svd.solve(&rhs, tol).map_err(|message| SimError::Contact {
+            t,
+            message: format!("the end of an accumulation of impacts: {message}"),
+        })?;
+        let mut x = DVector::zeros(2 * k);
+        for (i, &r) in rows.iter().enumerate() {
+            x[r] = p_r[i];
+        }
+        let materials: Vec<Material> = points.iter().map(|p| Material { e: 0.0, ..p.2 }).collect();
+        let modes: Vec<Mode> = (0..k)
+            .map(|i| {
+                if rows.contains(&(2 * i + 1)) {
+                    Mode::Stick
+                } else {
+                    Mode::Slide(set.v[2 * i + 1].signum())
+                }
+            })
+            .collect();
+        self.jump(
+            model,
+            ImpactCause::AccumulationEnd,
+            &set,
+            &materials,
+            &x,
+            &modes,
+            t,
+            q,
+            u,
+        )
+    }
+
+    /// The frames, rows, `W = J M⁻¹ Jᵀ` and velocities of several contact points at
+    /// `(t, q, u)`.
+    fn assemble(
+        &mut self,
+        model: &Model,
+        points: impl ExactSizeIterator<Item = (PairId, PairContact)>,
+        t: Real,
+        q: &[Real],
+        u: &[Real],
+    ) -> Result<PointSet, SimError> {
+        let (k, nu) = (points.len(), model.nu());
+        let mut jac = DMatrix::zeros(2 * k, nu);
+        let mut frames = Vec::with_capacity(k);
+        let mut v = DVector::zeros(2 * k);
+        for (i, (pair, contact)) in points.enumerate() {
+            let frame = self.frame_at_point(model, (pair, contact), t, q, u)?;
+            for r in 0..nu {
+                jac[(2 * i, r)] = self.j_n[r];
+                jac[(2 * i + 1, r)] = self.j_t[r];
+            }
+            v[2 * i] = frame.v_n();
+            v[2 * i + 1] = frame.v_t();
+            frames.push(frame);
+        }
+        mass_matrix(model, &mut self.data);
+        factor_mass_matrix(&mut self.data, t).map_err(|e| SimError::at(t, e))?;
+        let mut minv_jt = DMatrix::zeros(nu, 2 * k);
+        let mut x = vec![0.0; nu];
+        for col in 0..2 * k {
+            x.iter_mut()
+                .zip(jac.row(col).iter())
+                .for_each(|(x, j)| *x = *j);
+            solve_mass(&self.data, &mut x).map_err(|e| SimError::at(t, e))?;
+            minv_jt.column_mut(col).copy_from_slice(&x);
+        }
+        let w = &jac * &minv_jt;
+        Ok(PointSet {
+            frames,
+            minv_jt,
+            w,
+            v,
+        })
+    }
+
+    /// Applies the impulses `x` (normal and tangential of each point of `set`) to `u`:
+    /// `Δu = M⁻¹ Jᵀ x`; one ledger entry per point with a nonzero normal impulse.
+    #[allow(clippy::too_many_arguments)]
+    fn jump(
+        &mut self,
+        model: &Model,
+        cause: ImpactCause,
+        set: &PointSet,
+        materials: &[Material],
+        x: &DVector<Real>,
+        modes: &[Mode],
+        t: Real,
+        q: &[Real],
+        u: &mut [Real],
+    ) -> Result<Vec<ImpactEvent>, SimError> {
+        let energy_before =
+            energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
+        let delta_u = &set.minv_jt * x;
+        for (ur, du) in u.iter_mut().zip(delta_u.iter()) {
+            *ur += du;
+        }
+        let energy_after =
+            energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
+        let v_plus = &set.v + &set.w * x;
+        // An impulse below rounding of the largest one is no impact.
+        let negligible = 1e-12 * x.amax();
+        let mut events = Vec::new();
+        let mut running = energy_before;
+        for (i, &material) in materials.iter().enumerate() {
+            let impulse = Impulse::new(x[2 * i], x[2 * i + 1]);
+            if impulse.n.abs() <= negligible {
+                continue;
+            }
+            let v_a = ContactVelocity::new(set.v[2 * i], set.v[2 * i + 1]);
+            let v_s = ContactVelocity::new(v_plus[2 * i], v_plus[2 * i + 1]);
+            let kind = match modes[i] {
+                Mode::Slide(s) if s > 0.0 => CollisionType::ForwardSliding,
+                Mode::Slide(_) => CollisionType::ReverseSliding,
+                _ => CollisionType::Sticking,
+            };
+            let w = &set.w;
+            let block = ImpactMatrix::new(
+                w[(2 * i, 2 * i)],
+                w[(2 * i, 2 * i + 1)],
+                w[(2 * i + 1, 2 * i + 1)],
+            );
+            let coefficients = Coefficients::new(
+                &block,
+                material.mu,
+                ContactVelocity::new(v_a.n.min(-Real::MIN_POSITIVE), v_a.t),
+            );
+            let phases = Phases::straight(v_a, kind, impulse, v_s);
+            let end = *phases.end();
+            let delta_e = energy_change(impulse, v_a, v_s);
+            let before = running;
+            running.kinetic += delta_e;
+            events.push(ImpactEvent {
+                index: 0,
+                cause,
+                t,
+                frame: set.frames[i],
+                material,
+                w: block,
+                v_a,
+                outcome: Outcome {
+                    law: Law::Newton,
+                    kind,
+                    case: coefficients.sign_case(),
+                    coefficients,
+                    impulse,
+                    v_s,
+                    phases,
+                    delta_e,
+                    work_n: end.work_n,
+                    work_t: end.work_t,
+                    mirrored: false,
+                },
+                delta_u: delta_u.iter().copied().collect(),
+                energy_before: before,
+                energy_after: running,
+            });
+        }
+        if let Some(last) = events.last_mut() {
+            last.energy_after = energy_after;
+        }
+        Ok(events)
+    }
+}
+
+/// Several contact points at one instant: their frames, `M⁻¹ Jᵀ` (nu × 2k),
+/// `W = J M⁻¹ Jᵀ` (2k × 2k) and velocities `(v_n, v_t)` (2k).
+struct PointSet {
+    frames: Vec<ContactFrame>,
+    minv_jt: DMatrix<Real>,
+    w: DMatrix<Real>,
+    v: DVector<Real>,
 }
 
 /// The name of a contact pair, `<collider a>/<collider b>`.

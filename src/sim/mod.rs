@@ -1,303 +1,55 @@
-//! The simulation loop: integrate the free flight, locate the first impact on the dense
-//! output, apply the impact map, repeat until the end time.
+//! The simulation loop: integrate between events, locate the first event on the dense
+//! output, resolve what happens at its instant (impacts, contact modes), repeat until the
+//! end time.
 //!
 //! ```text
-//! start        y(t0) = [q0; u0; 0], E0, first sample, impacts already under way at t0
+//! start        y(t0) = [q0; u0; 0], E0, first sample, contacts already closed at t0
 //! loop         stop?  (end time, Ctrl-C)
-//!              step          one accepted integrator step            (integrate)
-//!              locate        the earliest closing gap in the step    (events)
-//!              settle        re-take the step to the event time      (full order)
+//!              step          one accepted integrator step              (integrate)
+//!              locate        the earliest event in the step            (events)
+//!              settle        re-take the step to the event time        (full order)
 //!              samples       the output times passed, on dense output
-//!              impacts       frame → W → law → Δu for every closing contact (impact map)
-//!              accumulation  stop when the contact no longer separates
+//!              contacts      impacts (frame → W → law → Δu), accumulations,
+//!                            persistent-contact modes, Painlevé         (contacts.rs)
 //! finish       final sample, energy audit, counters
 //! ```
 //!
-//! Persistent contact is not modelled yet: a contact that no longer separates after an
-//! impact (an accumulation of impacts, `e = 0`, a resting contact) stops the run with
-//! [`StopReason::Accumulation`] and a valid log.
+//! The events are the closing crossings of the functions of [`gaps`]: the gap of an open
+//! contact (an impact), and, for closed contact points in persistent contact, the normal
+//! force (lift-off), the friction margin (stick to slip), the slip velocity (slip to stop)
+//! and the Painlevé coefficient.
 
 mod accumulation;
-mod gaps;
+mod contacts;
+mod error;
+pub mod gaps;
 mod impact_map;
 mod observer;
+mod persistent;
+mod summary;
 mod system;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use accumulation::Scales;
+pub use error::{AtTime, Nested, SimError, StopReason};
 pub use gaps::GapFunctions;
-pub use impact_map::{ImpactEvent, ImpactMap, MaterialOverride};
-pub use observer::{Level, NullObserver, Observer, ObserverError, Recorder, Sample};
+pub use impact_map::{ImpactCause, ImpactEvent, ImpactMap, MaterialOverride};
+pub use observer::{
+    Level, NullObserver, Observer, ObserverError, PairMode, Recorder, Sample, Transition,
+};
+pub use persistent::{Closed, Hold};
+pub use summary::{EnergyAudit, RunCounters, RunSummary};
 pub use system::MotionSystem;
 
-use crate::contact::ContactError;
-use crate::dynamics::{DynamicsError, Energy, energy};
-use crate::events::{Event, EventError, EventLocator, LocatorSettings};
-use crate::impact::ImpactError;
-use crate::integrate::{AnyStepper, IntegrateError, SettingsError, Stepper};
-use crate::kinematics::{KinematicsError, update_positions};
+use crate::dynamics::{Energy, energy};
+use crate::events::{Event, EventLocator, LocatorSettings};
+use crate::integrate::{AnyStepper, Stepper};
 use crate::math::Real;
 use crate::model::{Model, PairId};
 use crate::settings::Settings;
 use crate::state::{Data, State};
 use accumulation::Guard;
-
-/// Why a run stopped.
-#[derive(Debug)]
-pub enum StopReason {
-    /// It reached its end time.
-    EndTime,
-    /// A contact no longer separates after its impacts (an accumulation of impacts, a
-    /// plastic impact, a resting contact): persistent contact is not modelled yet.
-    Accumulation {
-        /// Time (s).
-        t: Real,
-        /// The contact pair.
-        pair: usize,
-        /// Its name, `<collider a>/<collider b>`.
-        name: String,
-        /// What was seen.
-        reason: String,
-    },
-    /// The caller asked it to stop (Ctrl-C).
-    Interrupted {
-        /// Time reached (s).
-        t: Real,
-    },
-    /// Something failed; the error says when and what.
-    Failed(SimError),
-}
-
-impl StopReason {
-    /// A short name for logs: `t_end`, `accumulation`, `interrupted`, `error`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            StopReason::EndTime => "t_end",
-            StopReason::Accumulation { .. } => "accumulation",
-            StopReason::Interrupted { .. } => "interrupted",
-            StopReason::Failed(_) => "error",
-        }
-    }
-}
-
-impl std::fmt::Display for StopReason {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            StopReason::EndTime => f.write_str("reached the end time"),
-            StopReason::Accumulation { name, reason, .. } => {
-                write!(f, "accumulation of impacts on {name}: {reason}")
-            }
-            StopReason::Interrupted { .. } => f.write_str("interrupted"),
-            StopReason::Failed(e) => write!(f, "failed: {e}"),
-        }
-    }
-}
-
-/// A failure of a run, with the time and what failed.
-#[derive(Debug, thiserror::Error)]
-pub enum SimError {
-    /// The dynamics failed (a singular mass matrix, a non-finite state).
-    #[error("at t = {t}: {source}")]
-    Dynamics {
-        /// Time (s).
-        t: Real,
-        /// What failed.
-        #[source]
-        source: DynamicsError,
-    },
-    /// A kinematics query failed.
-    #[error("at t = {t}: {source}")]
-    Kinematics {
-        /// Time (s).
-        t: Real,
-        /// What failed.
-        #[source]
-        source: KinematicsError,
-    },
-    /// A contact query failed (an unsupported shape pair).
-    #[error("at t = {t}: {source}")]
-    ContactQuery {
-        /// Time (s).
-        t: Real,
-        /// What failed.
-        #[source]
-        source: ContactError,
-    },
-    /// A contact could not be resolved.
-    #[error("at t = {t}: {message}")]
-    Contact {
-        /// Time (s).
-        t: Real,
-        /// What happened.
-        message: String,
-    },
-    /// The impact law could not solve an impact.
-    #[error("at t = {t}: the impact on {name} failed: {source}")]
-    Impact {
-        /// Time (s).
-        t: Real,
-        /// The contact pair.
-        pair: usize,
-        /// Its name, `<collider a>/<collider b>`.
-        name: String,
-        /// The law's error.
-        #[source]
-        source: ImpactError,
-    },
-    /// The integrator failed.
-    #[error(transparent)]
-    Integrate(#[from] IntegrateError<DynamicsError>),
-    /// Locating an event failed.
-    #[error(transparent)]
-    Locate(#[from] EventError<ContactError>),
-    /// Settling on an event failed.
-    #[error(transparent)]
-    Settle(#[from] EventError<ContactError, DynamicsError>),
-    /// Simultaneous impacts kept re-closing.
-    #[error("at t = {t}: simultaneous impacts did not settle after {rounds} sequential impacts")]
-    Simultaneous {
-        /// Time (s).
-        t: Real,
-        /// Impacts applied at that instant.
-        rounds: usize,
-    },
-    /// The settings cannot be used.
-    #[error(transparent)]
-    Settings(#[from] SettingsError),
-    /// A material override is out of range.
-    #[error("the override of {what} = {value} is out of range (e ∈ [0, 1], μ ≥ 0)")]
-    Override {
-        /// `e` or `mu`.
-        what: &'static str,
-        /// The value given.
-        value: Real,
-    },
-    /// The initial state does not fit the model.
-    #[error("the initial state has {got} coordinates or speeds, the model {expected}")]
-    InitialState {
-        /// `nq` of the model.
-        expected: usize,
-        /// What the state has.
-        got: usize,
-    },
-    /// The observer (the log) failed.
-    #[error("at t = {t}: the log failed: {message}")]
-    Observer {
-        /// Time (s).
-        t: Real,
-        /// Its error.
-        message: String,
-    },
-}
-
-/// An error that happened at a known time.
-pub trait AtTime {
-    /// The error as a [`SimError`] at time `t`.
-    fn at(self, t: Real) -> SimError;
-}
-
-impl AtTime for DynamicsError {
-    fn at(self, t: Real) -> SimError {
-        SimError::Dynamics { t, source: self }
-    }
-}
-
-impl AtTime for KinematicsError {
-    fn at(self, t: Real) -> SimError {
-        SimError::Kinematics { t, source: self }
-    }
-}
-
-impl AtTime for ContactError {
-    fn at(self, t: Real) -> SimError {
-        SimError::ContactQuery { t, source: self }
-    }
-}
-
-impl AtTime for ObserverError {
-    fn at(self, t: Real) -> SimError {
-        SimError::Observer {
-            t,
-            message: self.to_string(),
-        }
-    }
-}
-
-impl SimError {
-    /// `e` at time `t`.
-    pub fn at(t: Real, e: impl AtTime) -> SimError {
-        e.at(t)
-    }
-}
-
-/// The energy audit of a run: `E_end − E_0` against what explains it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct EnergyAudit {
-    /// Energies at the start (J).
-    pub initial: Energy,
-    /// Energies at the end (J).
-    pub end: Energy,
-    /// Σ ΔE of Eq. (29) over the impacts (J).
-    pub impact_delta_e: Real,
-    /// Σ of the Eq. (28) terms over the impacts: the work of the prescribed motions at the
-    /// impacts (J).
-    pub impact_prescribed_work: Real,
-    /// Work of the joint dampers (J), never positive.
-    pub damping_work: Real,
-    /// Work of the constant joint efforts (J).
-    pub applied_work: Real,
-    /// Work of the prescribed drives between impacts (J).
-    pub drive_work: Real,
-}
-
-impl EnergyAudit {
-    /// What the bookkeeping does not explain, the integration drift:
-    /// `E_end − E_0 − (ΣΔE + Σ Eq. 28 + W_damping + W_applied + W_drives)` (J).
-    pub fn drift(&self) -> Real {
-        self.end.total()
-            - self.initial.total()
-            - (self.impact_delta_e
-                + self.impact_prescribed_work
-                + self.damping_work
-                + self.applied_work
-                + self.drive_work)
-    }
-}
-
-/// Work counters of a run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RunCounters {
-    /// Accepted steps.
-    pub steps: u64,
-    /// Rejected steps.
-    pub rejected: u64,
-    /// Right-hand-side evaluations.
-    pub rhs_evals: u64,
-    /// Events located.
-    pub events: u64,
-    /// Impacts applied.
-    pub impacts: u64,
-    /// Samples reported.
-    pub samples: u64,
-}
-
-/// The result of a run.
-#[derive(Debug)]
-pub struct RunSummary {
-    /// Why it stopped.
-    pub stop: StopReason,
-    /// The state where it stopped.
-    pub state: State,
-    /// The energy audit.
-    pub audit: EnergyAudit,
-    /// Work counters.
-    pub counters: RunCounters,
-}
-
-/// The most impacts applied at one instant before giving up (simultaneous contacts that
-/// keep re-closing each other).
-const MAX_IMPACTS_AT_ONE_INSTANT: usize = 100;
 
 /// A simulation of one model with its settings; [`Simulation::run`] runs it.
 pub struct Simulation<'m> {
@@ -312,7 +64,16 @@ pub struct Simulation<'m> {
     map: ImpactMap,
     /// Scratch for samples.
     sampler: Data,
+    /// Armed event functions (see [`gaps::slot`]).
     armed: Vec<bool>,
+    /// Pairs whose gap event is disarmed after a spurious crossing (rounding noise just
+    /// after an impact), until they are clearly open.
+    disarmed: Vec<bool>,
+    /// The mode of each pair, for the samples.
+    modes: Vec<PairMode>,
+    /// The last instant of impacts on each pair and the fastest separation of its points
+    /// then `(t, v_n)`: the last hop, for the ratio and duration of an accumulation.
+    last_separation: Vec<Option<(Real, Real)>>,
     guard: Guard,
     /// Scratch state `y`.
     y: Vec<Real>,
@@ -334,23 +95,26 @@ impl<'m> Simulation<'m> {
         overrides: MaterialOverride,
     ) -> Result<Self, SimError> {
         overrides.validate()?;
-        let system = MotionSystem::new(model);
+        let scales = Scales::of(model, &settings.integrator);
+        let system = MotionSystem::new(model, scales);
         let n = crate::integrate::OdeSystem::dim(&system);
         let npairs = model.pairs().len();
-        let scales = Scales::of(model, &settings.integrator);
         Ok(Self {
             model,
             settings: settings.clone(),
             overrides,
             scales,
             stepper: AnyStepper::new(n, &settings.integrator)?,
-            locator: EventLocator::new(n, npairs, LocatorSettings::default()),
+            locator: EventLocator::new(n, gaps::SLOTS * npairs, LocatorSettings::default()),
             system,
-            gaps: GapFunctions::new(model),
+            gaps: GapFunctions::new(model, scales),
             map: ImpactMap::new(model),
             sampler: Data::new(model),
-            armed: vec![true; npairs],
-            guard: Guard::new(scales),
+            armed: vec![false; gaps::SLOTS * npairs],
+            disarmed: vec![false; npairs],
+            modes: vec![PairMode::Free; npairs],
+            last_separation: vec![None; npairs],
+            guard: Guard::new(),
             y: vec![0.0; n],
             gap_values: vec![0.0; npairs],
             next_output: 0,
@@ -388,7 +152,8 @@ impl<'m> Simulation<'m> {
         interrupt: Option<&AtomicBool>,
     ) -> Result<StopReason, SimError> {
         self.start(initial, observer)?;
-        if let Some(stop) = self.impacts(None, observer)? {
+        self.arm();
+        if let Some(stop) = self.contacts(None, observer)? {
             return Ok(stop);
         }
         let t_end = self.settings.t_end;
@@ -410,8 +175,15 @@ impl<'m> Simulation<'m> {
                 Some(event) => {
                     self.counters.events += 1;
                     self.settle(&event)?;
+                    if let Some(reason) = self.guard.after_event(self.stepper.t()) {
+                        return Ok(self.accumulation(
+                            self.stepper.t(),
+                            PairId(event.index / gaps::SLOTS),
+                            reason,
+                        ));
+                    }
                     self.samples_until(self.stepper.t(), observer)?;
-                    if let Some(stop) = self.impacts(Some(&event), observer)? {
+                    if let Some(stop) = self.contacts(Some(&event), observer)? {
                         return Ok(stop);
                     }
                 }
@@ -458,32 +230,40 @@ impl<'m> Simulation<'m> {
         Ok(())
     }
 
-    /// Stage `rearm`: a pair disarmed after a spurious event is armed again once its gap
-    /// exceeds the closed-contact tolerance; then the step cap is lifted.
+    /// Stage `rearm`: a pair whose gap event is disarmed (a spurious or grazing crossing)
+    /// is armed again once that gap exceeds the closed-contact tolerance; then the step cap
+    /// is lifted.
     fn rearm(&mut self, t: Real) -> Result<(), SimError> {
-        if self.armed.iter().all(|&a| a) {
+        if !self.disarmed.iter().any(|&d| d) {
             return Ok(());
         }
-        let n = self.model.nq();
-        update_positions(self.model, &mut self.sampler, t, &self.stepper.y()[..n])
-            .map_err(|e| e.at(t))?;
-        for (k, armed) in self.armed.iter_mut().enumerate() {
-            if !*armed {
-                let gap = crate::contact::signed_gap(
-                    self.model,
-                    &self.sampler,
-                    PairId(k),
-                    Real::INFINITY,
-                )
-                .map_err(|e| e.at(t))?
-                .unwrap_or(Real::INFINITY);
-                *armed = gap > self.scales.gap_tol;
+        for k in 0..self.disarmed.len() {
+            if self.disarmed[k] {
+                let gap = self.gaps.open_gap(PairId(k), t, self.stepper.y())?;
+                self.disarmed[k] = gap <= self.scales.gap_tol;
             }
         }
-        if self.armed.iter().all(|&a| a) {
+        if !self.disarmed.iter().any(|&d| d) {
             self.stepper.set_h_max(self.settings.integrator.h_max);
         }
+        self.arm();
         Ok(())
+    }
+
+    /// Arms the event functions of the current contact modes (see [`gaps::slot`]).
+    fn arm(&mut self) {
+        self.armed.fill(false);
+        let closed = self.system.persistent.closed();
+        for k in 0..self.disarmed.len() {
+            let on_pair = closed.iter().filter(|c| c.pair.index() == k).count();
+            self.armed[gaps::SLOTS * k] = on_pair < 2 && !self.disarmed[k];
+        }
+        for (i, c) in closed.iter().enumerate() {
+            let j = gaps::rank(&self.system.persistent, i);
+            self.armed[gaps::slot(c.pair, 1 + 3 * j)] = true;
+            self.armed[gaps::slot(c.pair, 2 + 3 * j)] = true;
+            self.armed[gaps::slot(c.pair, 3 + 3 * j)] = matches!(c.hold, Hold::Slide(_));
+        }
     }
 
     /// Stage `settle`: the state at the event time at the method's full order.
@@ -554,147 +334,12 @@ impl<'m> Simulation<'m> {
             gaps: &self.gap_values,
             poses: &self.sampler.body_pose,
             at_impact,
+            modes: &self.modes,
         };
         observer.sample(self.model, &sample).map_err(|e| e.at(t))?;
         self.counters.samples += 1;
         self.last_sample_t = Some(t);
         Ok(())
-    }
-
-    /// Stage `impacts`: applies the impact map to every contact that is closed and
-    /// approaching at the current time, the most violent first, until none approaches;
-    /// then restarts the integrator from the new state. Returns a stop reason if a contact
-    /// no longer separates (`accumulation`).
-    fn impacts(
-        &mut self,
-        event: Option<&Event>,
-        observer: &mut dyn Observer,
-    ) -> Result<Option<StopReason>, SimError> {
-        let t = self.stepper.t();
-        let mut y = std::mem::take(&mut self.y);
-        y.copy_from_slice(self.stepper.y());
-        let result = self.impacts_at(t, &mut y, event, observer);
-        let outcome = match result {
-            Ok((applied, stop)) => {
-                if applied > 0 {
-                    let reset = self.stepper.reset(&mut self.system, t, &y);
-                    let sample = self.sample(t, &y, true, observer);
-                    reset.map_err(SimError::from).and(sample).map(|()| stop)
-                } else {
-                    Ok(stop)
-                }
-            }
-            Err(e) => Err(e),
-        };
-        self.y = y;
-        outcome
-    }
-
-    /// The impacts at `t` on the state `y` (updated in place); the number applied and a
-    /// stop reason, if any.
-    fn impacts_at(
-        &mut self,
-        t: Real,
-        y: &mut [Real],
-        event: Option<&Event>,
-        observer: &mut dyn Observer,
-    ) -> Result<(usize, Option<StopReason>), SimError> {
-        let n = self.model.nq();
-        let mut applied = 0usize;
-        // The closed contact that approaches fastest, until none approaches.
-        while let Some((pair, v_n)) = self.most_approaching(t, y)? {
-            if applied == 0 {
-                self.sample(t, y, true, observer)?;
-            }
-            if applied == MAX_IMPACTS_AT_ONE_INSTANT {
-                return Err(SimError::Simultaneous { t, rounds: applied });
-            }
-            let material = self
-                .overrides
-                .apply(self.model.pairs()[pair.index()].material);
-            let (q, u) = y[..2 * n].split_at_mut(n);
-            let Some(mut impact) = self.map.apply(self.model, pair, material, t, q, u)? else {
-                return Err(SimError::Contact {
-                    t,
-                    message: format!(
-                        "pair #{} approaches at {v_n} m/s but its impact map found no approach",
-                        pair.index()
-                    ),
-                });
-            };
-            impact.index = self.counters.impacts;
-            self.counters.impacts += 1;
-            applied += 1;
-            self.audit.impact_delta_e += impact.outcome.delta_e;
-            self.audit.impact_prescribed_work += impact.prescribed_work();
-            observer.impact(self.model, &impact).map_err(|e| e.at(t))?;
-            if applied == 2 {
-                observer
-                    .message(
-                        t,
-                        Level::Warning,
-                        "simultaneous impacts: applied one contact at a time, the fastest approach first",
-                    )
-                    .map_err(|e| e.at(t))?;
-            }
-            if let Some(reason) = self.guard.after_impact(t, impact.outcome.v_s.n) {
-                return Ok((applied, Some(self.accumulation(t, pair, reason))));
-            }
-        }
-        if applied == 0
-            && let Some(event) = event
-        {
-            let pair = PairId(event.index);
-            let frame = self.map.frame(self.model, pair, t, &y[..n], &y[n..2 * n])?;
-            if frame.v_n() > self.scales.v_tiny {
-                // The contact separates: the "crossing" was the gap's rounding noise just
-                // after an impact (the separation is still below it). Disarm the pair
-                // until it is clearly open, with steps short enough to see it close again.
-                self.armed[pair.index()] = false;
-                let h = 10.0 * self.scales.gap_tol / frame.v_n();
-                self.stepper
-                    .set_h_max(h.min(self.settings.integrator.h_max));
-                return Ok((0, None));
-            }
-            // The event closed a contact that does not approach: a resting or rolling
-            // contact, which needs persistent-contact modes.
-            let reason = format!(
-                "the contact closed ({:?}) without approaching: gap {:.3e} m, normal velocity \
-                 {:.3e} m/s",
-                event.kind,
-                frame.gap,
-                frame.v_n()
-            );
-            return Ok((0, Some(self.accumulation(t, pair, reason))));
-        }
-        Ok((applied, None))
-    }
-
-    /// The closed contact (gap within the tolerance) that approaches fastest, if any
-    /// approaches faster than the resting speed's tiny fraction.
-    fn most_approaching(
-        &mut self,
-        t: Real,
-        y: &[Real],
-    ) -> Result<Option<(PairId, Real)>, SimError> {
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
-        update_positions(self.model, &mut self.sampler, t, q).map_err(|e| e.at(t))?;
-        let mut best: Option<(PairId, Real)> = None;
-        for k in 0..self.model.pairs().len() {
-            let pair = PairId(k);
-            let gap = crate::contact::signed_gap(self.model, &self.sampler, pair, Real::INFINITY)
-                .map_err(|e| e.at(t))?
-                .unwrap_or(Real::INFINITY);
-            if gap > self.scales.gap_tol {
-                continue;
-            }
-            let v_n = self.map.frame(self.model, pair, t, q, u)?.v_n();
-            if v_n < -self.scales.v_tiny && best.is_none_or(|(_, b)| v_n < b) {
-                best = Some((pair, v_n));
-            }
-        }
-        Ok(best)
     }
 
     /// A stop for an accumulation (the final message goes to the log in [`Self::finish`]).
@@ -717,11 +362,10 @@ impl<'m> Simulation<'m> {
             kinetic: Real::NAN,
             potential: Real::NAN,
         });
-        if self.system.has_works() {
-            self.audit.damping_work = y[2 * n];
-            self.audit.applied_work = y[2 * n + 1];
-            self.audit.drive_work = y[2 * n + 2];
-        }
+        self.audit.damping_work = y[2 * n];
+        self.audit.applied_work = y[2 * n + 1];
+        self.audit.drive_work = y[2 * n + 2];
+        self.audit.contact_work = y[2 * n + 3];
         let level = match stop {
             StopReason::Failed(_) => Level::Error,
             StopReason::Accumulation { .. } | StopReason::Interrupted { .. } => Level::Warning,

@@ -3,7 +3,7 @@
 
 use crate::dynamics::Energy;
 use crate::math::{Pose, Real};
-use crate::model::Model;
+use crate::model::{Model, PairId};
 
 use super::ImpactEvent;
 
@@ -24,6 +24,51 @@ pub struct Sample<'a> {
     pub poses: &'a [Pose],
     /// `true` for the two samples taken at an impact instant (before and after the jump).
     pub at_impact: bool,
+    /// The mode of every contact pair, in pair order.
+    pub modes: &'a [PairMode],
+}
+
+/// The mode of a contact pair: open, or closed and sticking or sliding (a pair with two
+/// closed points slides if either slides).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum PairMode {
+    /// Open (or touching without force).
+    #[default]
+    Free,
+    /// Closed, not slipping.
+    Sticking,
+    /// Closed, slipping.
+    Sliding,
+}
+
+impl PairMode {
+    /// `free`, `sticking` or `sliding`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PairMode::Free => "free",
+            PairMode::Sticking => "sticking",
+            PairMode::Sliding => "sliding",
+        }
+    }
+}
+
+/// A change of the mode of a contact pair in persistent contact.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transition {
+    /// Time (s).
+    pub t: Real,
+    /// The pair.
+    pub pair: PairId,
+    /// Its name, `<collider a>/<collider b>`.
+    pub name: String,
+    /// The mode before.
+    pub from: PairMode,
+    /// The mode after.
+    pub to: PairMode,
+    /// What happened, in words.
+    pub note: String,
+    /// For an accumulation of impacts: the time at which the extrapolated hops end (s).
+    pub t_accumulation: Option<Real>,
 }
 
 /// The severity of a message.
@@ -56,6 +101,12 @@ pub trait Observer {
 
     /// A message at time `t` (s).
     fn message(&mut self, t: Real, level: Level, text: &str) -> Result<(), ObserverError>;
+
+    /// A change of contact mode (also reported as a message).
+    fn transition(&mut self, model: &Model, transition: &Transition) -> Result<(), ObserverError> {
+        let _ = (model, transition);
+        Ok(())
+    }
 }
 
 /// An observer that keeps nothing: the simulation alone.
@@ -84,6 +135,8 @@ pub struct Recorder {
     pub impacts: Vec<ImpactEvent>,
     /// Every message, with its time and level.
     pub messages: Vec<(Real, Level, String)>,
+    /// Every change of contact mode.
+    pub transitions: Vec<Transition>,
     /// Every sample's time, coordinates, speeds and total energy, if `samples` is set.
     pub samples: Vec<(Real, Vec<Real>, Vec<Real>, Real)>,
     /// Whether to keep samples.
@@ -105,6 +158,10 @@ impl Observer for Recorder {
     }
     fn message(&mut self, t: Real, level: Level, text: &str) -> Result<(), ObserverError> {
         self.messages.push((t, level, text.to_owned()));
+        Ok(())
+    }
+    fn transition(&mut self, _: &Model, transition: &Transition) -> Result<(), ObserverError> {
+        self.transitions.push(transition.clone());
         Ok(())
     }
 }

@@ -155,6 +155,7 @@ fn audit(out: &mut String, log: &RunLog) {
         ("E_end − E_0", joules(a.energy_final - a.energy_initial)),
         ("impacts ΣΔE", joules(a.impact_delta_e)),
         ("applied work", joules(a.applied_work)),
+        ("contact work", joules(a.contact_work)),
         ("prescribed work", joules(a.prescribed_work)),
         ("integration drift", joules(a.integration_drift)),
         (

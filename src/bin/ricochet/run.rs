@@ -277,14 +277,14 @@ fn report(
                 }
                 writeln!(
                     out,
-                    "{:>5} {:>12.6} {:<16} {:<13} {:<15} {:>4} {:>9.4} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e}",
+                    "{:>5} {:>12.6} {:<16} {:<13} {:<15} {:>4} {:>9} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e} {:>11.4e}",
                     k,
                     r.t,
                     r.pair,
                     r.law.name(),
                     r.kind,
                     r.case,
-                    r.alpha,
+                    short(r.alpha),
                     r.i_n,
                     r.i_t,
                     r.v_s.0,
@@ -344,6 +344,11 @@ fn report(
         )?;
         writeln!(
             out,
+            "  persistent contact forces    {:>16.9e}",
+            a.contact_work
+        )?;
+        writeln!(
+            out,
             "  integration drift            {:>16.9e}   ({:.1e} relative)",
             a.drift(),
             a.drift().abs() / scale
@@ -351,4 +356,14 @@ fn report(
     }
     writeln!(out, "log: {}", output.display())?;
     Ok(())
+}
+
+/// `x` in at most 9 characters: fixed below 10⁴, scientific above (α is unbounded as the
+/// approach speed vanishes).
+fn short(x: Real) -> String {
+    if x.abs() < 1e4 {
+        format!("{x:.4}")
+    } else {
+        format!("{x:.2e}")
+    }
 }

@@ -1,0 +1,478 @@
+//! Persistent contact: closed contact points held by forces at the acceleration level,
+//! with Coulomb friction, between impacts.
+//!
+//! A closed point `k` of a pair keeps its normal relative acceleration at zero, and if it
+//! sticks its tangential one too:
+//!
+//! ```text
+//! M u̇ = τ − h + Σ_k (J_n,kᵀ λ_n,k + J_t,kᵀ λ_t,k)
+//! a_n,k = J_n,k u̇ + c_n,k = 0                       (closed)
+//! a_t,k = J_t,k u̇ + c_t,k = 0, |λ_t,k| ≤ μ λ_n,k     (sticking)
+//! λ_t,k = −μ s_k λ_n,k                               (sliding with slip s_k = ±1 along t)
+//! ```
+//!
+//! with `J_n`, `J_t` the rows of the contact frame ([`crate::contact::frame_at`], tangent
+//! `t = perp(n)`) and `c` the velocity-product parts of the contact accelerations. The
+//! normal velocity of a point is `V_n(t, q, u) = n(q)·v^R(t, q, u)`, so
+//! `a_n = dV_n/dt = J_n u̇ + c_n` with `c_n = ∂V_n/∂t + (∂V_n/∂q) u`, computed by a central
+//! difference along the motion, `c_n ≈ [V_n(t+ε, q+εu, u) − V_n(t−ε, q−εu, u)] / (2ε)`
+//! (the same for `c_t`): it holds the curvature of both surfaces and the turning of `n`
+//! whatever the shapes. With `A = J M⁻¹ Jᵀ` and `b = J M⁻¹ (τ − h) + c`, the forces
+//! solve the equations of the modes ([`crate::lcp::forces`]); the modes themselves come
+//! from the complementarity problem `a = A λ + b` ([`crate::lcp::solve`]), whose lack of
+//! solution or multiple solutions is Painlevé's paradox.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{AtTime, Scales, SimError};
+use crate::contact::{
+    ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent, contact_points, frame_at,
+};
+use crate::dynamics::solve_mass;
+use crate::kinematics::{update_positions, update_velocities};
+use crate::lcp::{self, Allowed, Mode};
+use crate::math::{Pose, Real, Vec2};
+use crate::model::{Model, PairId};
+use crate::state::Data;
+
+/// How a closed contact point holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Hold {
+    /// It does not slip.
+    Stick,
+    /// It slips in the direction `s = ±1` along its tangent `t = perp(n)`.
+    Slide(Real),
+}
+
+impl Hold {
+    /// The mode of the complementarity problem.
+    pub fn mode(self) -> Mode {
+        match self {
+            Hold::Stick => Mode::Stick,
+            Hold::Slide(s) => Mode::Slide(s),
+        }
+    }
+}
+
+/// A closed contact point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closed {
+    /// The pair.
+    pub pair: PairId,
+    /// The point on the shape of the pair's collider `a`, in the frame of its body (m):
+    /// which of the pair's (at most two) contact points this is.
+    pub local: Vec2,
+    /// How it holds.
+    pub hold: Hold,
+}
+
+/// One contact point at an instant: its frame and velocities.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    /// The pair.
+    pub pair: PairId,
+    /// The point on `a` in the frame of `a`'s body (m).
+    pub local: Vec2,
+    /// Its frame, tangent `perp(n)`.
+    pub frame: ContactFrame,
+    /// Normal relative velocity `V_n = v^R·n` (m/s).
+    pub v_n: Real,
+    /// Tangential relative velocity `V_t = v^R·t` (m/s).
+    pub v_t: Real,
+}
+
+/// The contact points of `pair` at the poses of `data`, with the point on `a` in its
+/// body's frame, within `tolerance` (m).
+pub fn pair_points(
+    model: &Model,
+    data: &Data,
+    pair: PairId,
+    tolerance: Real,
+    ws: &mut ManifoldWorkspace,
+) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
+    let t = data.time;
+    let points = contact_points(model, data, pair, tolerance, ws).map_err(|e| e.at(t))?;
+    let pose = body_pose_of_a(model, data, pair);
+    Ok(points
+        .into_iter()
+        .map(|c| {
+            let local = pose.inverse_transform_point(c.point_a);
+            (c, local)
+        })
+        .collect())
+}
+
+fn body_pose_of_a(model: &Model, data: &Data, pair: PairId) -> Pose {
+    let a = model.pairs()[pair.index()].a;
+    match model.colliders()[a.index()].body {
+        Some(b) => data.body_pose[b.index()],
+        None => Pose::IDENTITY,
+    }
+}
+
+/// Scratch and results of the constrained dynamics of a set of closed points.
+pub struct Persistent {
+    /// The closed points.
+    closed: Vec<Closed>,
+    /// Coefficients of friction of the closed points.
+    mu: Vec<Real>,
+    scales: Scales,
+    /// Kinematics at the perturbed states of the central differences.
+    data_fd: Data,
+    /// Scratch of the point evaluations.
+    eval: PointScratch,
+    /// The perturbed coordinates of the central differences.
+    q_fd: Vec<Real>,
+    /// One column of `M⁻¹ Jᵀ`.
+    column: Vec<Real>,
+    /// The velocity-product terms `c` (2k).
+    c: DVector<Real>,
+    /// `J` (2k × nu): rows n, t of each closed point.
+    jac: DMatrix<Real>,
+    /// `M⁻¹ Jᵀ` (nu × 2k).
+    minv_jt: DMatrix<Real>,
+    /// `A = J M⁻¹ Jᵀ` (2k × 2k).
+    a: DMatrix<Real>,
+    /// `b = J u̇_free + c` (2k).
+    b: DVector<Real>,
+    /// The forces `λ` (2k) of the last evaluation.
+    lambda: DVector<Real>,
+    /// The points of the last evaluation.
+    points: Vec<Point>,
+    /// Whether the last evaluation found every closed point.
+    complete: bool,
+}
+
+impl Persistent {
+    /// Scratch for `model`, no closed point.
+    pub fn new(model: &Model, scales: Scales) -> Self {
+        let nu = model.nu();
+        Self {
+            closed: Vec::new(),
+            mu: Vec::new(),
+            scales,
+            data_fd: Data::new(model),
+            eval: PointScratch::new(model),
+            q_fd: vec![0.0; model.nq()],
+            column: vec![0.0; nu],
+            c: DVector::zeros(0),
+            jac: DMatrix::zeros(0, nu),
+            minv_jt: DMatrix::zeros(nu, 0),
+            a: DMatrix::zeros(0, 0),
+            b: DVector::zeros(0),
+            lambda: DVector::zeros(0),
+            points: Vec::new(),
+            complete: true,
+        }
+    }
+
+    /// The closed points.
+    pub fn closed(&self) -> &[Closed] {
+        &self.closed
+    }
+
+    /// Replaces the closed points (`mu` from their pairs, after overrides).
+    pub fn set(&mut self, closed: Vec<Closed>, mu: Vec<Real>) {
+        let (k, nu) = (closed.len(), self.column.len());
+        self.closed = closed;
+        self.mu = mu;
+        self.jac = DMatrix::zeros(2 * k, nu);
+        self.minv_jt = DMatrix::zeros(nu, 2 * k);
+        self.a = DMatrix::zeros(2 * k, 2 * k);
+        self.b = DVector::zeros(2 * k);
+        self.c = DVector::zeros(2 * k);
+        self.lambda = DVector::zeros(2 * k);
+        self.points.clear();
+    }
+
+    /// The velocity-product parts `(c_n, c_t)` of the accelerations of the point `local` of
+    /// `pair`, by a central difference of its velocities along the motion, with the step
+    /// `ε = 10⁻⁶ L / v_ref` (the scene's length and speed scales).
+    fn velocity_products(
+        &mut self,
+        model: &Model,
+        (t, q, u): (Real, &[Real], &[Real]),
+        pair: PairId,
+        local: Vec2,
+    ) -> Result<(Real, Real), SimError> {
+        let eps = 1e-6 * self.scales.length / self.scales.speed;
+        let mut v = [(0.0, 0.0); 2];
+        for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+            for ((qf, qi), ui) in self.q_fd.iter_mut().zip(q).zip(u) {
+                *qf = qi + sign * eps * ui;
+            }
+            let ts = t + sign * eps;
+            update_positions(model, &mut self.data_fd, ts, &self.q_fd).map_err(|e| e.at(t))?;
+            update_velocities(model, &mut self.data_fd, u).map_err(|e| e.at(t))?;
+            let p = self
+                .eval
+                .point(model, &self.data_fd, pair, local, self.scales.length)?
+                .ok_or_else(|| SimError::Contact {
+                    t,
+                    message: format!("closed contact point of pair #{} lost", pair.index()),
+                })?;
+            v[k] = (p.v_n, p.v_t);
+        }
+        Ok((
+            (v[0].0 - v[1].0) / (2.0 * eps),
+            (v[0].1 - v[1].1) / (2.0 * eps),
+        ))
+    }
+
+    /// The rows, `A`, `b` of the closed points at `(t, q, u)`. `data` holds the forward
+    /// dynamics of that state (`M` factored, `u̇_free` in `data.udot`).
+    fn assemble(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (t, q, u): (Real, &[Real], &[Real]),
+    ) -> Result<(), SimError> {
+        let k = self.closed.len();
+        self.points.clear();
+        self.complete = true;
+        for i in 0..k {
+            let Closed { pair, local, .. } = self.closed[i];
+            match self
+                .eval
+                .point(model, data, pair, local, self.scales.length)?
+            {
+                Some(p) => {
+                    for r in 0..model.nu() {
+                        self.jac[(2 * i, r)] = self.eval.j_n[r];
+                        self.jac[(2 * i + 1, r)] = self.eval.j_t[r];
+                    }
+                    self.points.push(p);
+                }
+                None => {
+                    self.complete = false;
+                    return Ok(());
+                }
+            }
+            let (cn, ct) = self.velocity_products(model, (t, q, u), pair, local)?;
+            self.c[2 * i] = cn;
+            self.c[2 * i + 1] = ct;
+        }
+        // M⁻¹ Jᵀ, column by column, with the factor of M; A = J M⁻¹ Jᵀ; b = J u̇_free + c.
+        for col in 0..2 * k {
+            for (x, j) in self.column.iter_mut().zip(self.jac.row(col).iter()) {
+                *x = *j;
+            }
+            solve_mass(data, &mut self.column).map_err(|e| e.at(t))?;
+            self.minv_jt.column_mut(col).copy_from_slice(&self.column);
+        }
+        self.a.gemm(1.0, &self.jac, &self.minv_jt, 0.0);
+        self.b.copy_from(&self.c);
+        self.b.gemv(1.0, &self.jac, &data.udot, 1.0);
+        Ok(())
+    }
+
+    /// The constrained accelerations at `(t, q, u)`: solves for the forces of the closed
+    /// points in their modes and adds `M⁻¹ Fᵀ λ` to `data.udot`, which holds the free
+    /// accelerations (after `forward_dynamics` of the same state).
+    pub fn accelerate(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        state: (Real, &[Real], &[Real]),
+    ) -> Result<(), SimError> {
+        if self.closed.is_empty() {
+            return Ok(());
+        }
+        let t = state.0;
+        self.assemble(model, data, state)?;
+        if !self.complete {
+            return Err(SimError::Contact {
+                t,
+                message: "a closed contact point has no contact any more".to_owned(),
+            });
+        }
+        let modes: Vec<Mode> = self.closed.iter().map(|c| c.hold.mode()).collect();
+        let sol = lcp::forces(&self.a, &self.b, &self.mu, &modes).ok_or(SimError::Contact {
+            t,
+            message: "the forces of the closed contact points have no solution".to_owned(),
+        })?;
+        self.lambda = sol.x;
+        data.udot.gemv(1.0, &self.minv_jt, &self.lambda, 1.0);
+        Ok(())
+    }
+
+    /// The coefficient of friction of closed point `i`.
+    pub fn mu(&self, i: usize) -> Real {
+        self.mu[i]
+    }
+
+    /// The forces `(λ_n, λ_t)` of closed point `i` at the last evaluation (N).
+    pub fn force(&self, i: usize) -> (Real, Real) {
+        (self.lambda[2 * i], self.lambda[2 * i + 1])
+    }
+
+    /// The points of the last evaluation.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// The Painlevé coefficient of closed point `i` when it slides: its own normal
+    /// acceleration per unit normal force with the friction of its slip,
+    /// `A_nn − μ s A_nt` (`h` of [P, Eq. (35)] for `s = +1`, `q` for `s = −1`, in the frame
+    /// of its slip). Non-positive: sliding cannot be held by a pushing force.
+    pub fn painleve(&self, i: usize) -> Real {
+        match self.closed[i].hold {
+            Hold::Slide(s) => self.a[(2 * i, 2 * i)] - self.mu[i] * s * self.a[(2 * i, 2 * i + 1)],
+            Hold::Stick => Real::INFINITY,
+        }
+    }
+
+    /// The power of the contact forces on the system, `Σ λ_n V_n + λ_t V_t` (W).
+    pub fn power(&self) -> Real {
+        (self.points.iter().enumerate())
+            .map(|(i, p)| self.lambda[2 * i] * p.v_n + self.lambda[2 * i + 1] * p.v_t)
+            .sum()
+    }
+
+    /// Selects the modes of the candidate points at `(t, q, u)` (`data` holds the forward
+    /// dynamics of that state), by the complementarity problem at the acceleration level. A
+    /// point slipping faster than `v_slip` keeps its slip direction; a candidate with a
+    /// given slip takes it.
+    pub fn select(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        state: (Real, &[Real], &[Real]),
+        candidates: &[Candidate],
+        v_slip: Real,
+    ) -> Result<Selection, SimError> {
+        // Assemble with provisional modes (the rows do not depend on them).
+        let closed: Vec<Closed> = candidates
+            .iter()
+            .map(|c| Closed {
+                pair: c.pair,
+                local: c.local,
+                hold: Hold::Stick,
+            })
+            .collect();
+        self.set(closed, candidates.iter().map(|c| c.mu).collect());
+        self.assemble(model, data, state)?;
+        let allowed: Vec<Allowed> = (self.points.iter().zip(candidates))
+            .map(|(p, c)| Allowed {
+                mu: c.mu,
+                open: true,
+                slip: c
+                    .slip
+                    .or_else(|| (p.v_t.abs() > v_slip).then(|| p.v_t.signum())),
+            })
+            .collect();
+        let solutions = lcp::solve(&self.a, &self.b, &allowed).all;
+        let painleve: Vec<Real> = (0..candidates.len())
+            .map(|i| match allowed[i].slip {
+                Some(s) => self.a[(2 * i, 2 * i)] - allowed[i].mu * s * self.a[(2 * i, 2 * i + 1)],
+                None => Real::INFINITY,
+            })
+            .collect();
+        Ok(Selection {
+            points: self.points.clone(),
+            free: (0..candidates.len()).map(|i| self.b[2 * i]).collect(),
+            solutions,
+            painleve,
+        })
+    }
+}
+
+/// A candidate point of a mode selection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    /// The pair.
+    pub pair: PairId,
+    /// The point on `a` in its body's frame (m).
+    pub local: Vec2,
+    /// Coulomb's coefficient.
+    pub mu: Real,
+    /// A slip direction it must take if it stays closed (it may not stick), if any.
+    pub slip: Option<Real>,
+}
+
+/// The outcome of a mode selection.
+#[derive(Clone, Debug)]
+pub struct Selection {
+    /// The candidate points, in order.
+    pub points: Vec<Point>,
+    /// The normal acceleration of each candidate with no contact force, `b_n` (m/s²).
+    pub free: Vec<Real>,
+    /// Every consistent combination of modes.
+    pub solutions: Vec<lcp::Solution>,
+    /// The Painlevé coefficient of each candidate that slides (infinite otherwise).
+    pub painleve: Vec<Real>,
+}
+
+/// Scratch to evaluate one contact point: the manifold, the frame and its rows.
+pub struct PointScratch {
+    manifold: ManifoldWorkspace,
+    frame: FrameWorkspace,
+    /// `J_n` of the last point (nu).
+    pub j_n: Vec<Real>,
+    /// `J_t` of the last point (nu).
+    pub j_t: Vec<Real>,
+}
+
+impl PointScratch {
+    /// Scratch for `model`.
+    pub fn new(model: &Model) -> Self {
+        Self {
+            manifold: ManifoldWorkspace::default(),
+            frame: FrameWorkspace::new(model),
+            j_n: vec![0.0; model.nu()],
+            j_t: vec![0.0; model.nu()],
+        }
+    }
+
+    /// The contact points of `pair` (within `prediction`, m) with their points on `a` in
+    /// the frame of `a`'s body.
+    pub fn candidates(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        pair: PairId,
+        prediction: Real,
+    ) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
+        pair_points(model, data, pair, prediction, &mut self.manifold)
+    }
+
+    /// The point of `pair` nearest `local` (a point on `a` in its body's frame) at the state
+    /// of `data` (positions and velocities updated), with its frame (`t = perp(n)`) and
+    /// velocities; its rows in `j_n`, `j_t`. `None` if the pair has no point within
+    /// `prediction` (m).
+    pub fn point(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        pair: PairId,
+        local: Vec2,
+        prediction: Real,
+    ) -> Result<Option<Point>, SimError> {
+        let t = data.time;
+        let candidates = self.candidates(model, data, pair, prediction)?;
+        let Some((c, l)) = candidates
+            .into_iter()
+            .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
+        else {
+            return Ok(None);
+        };
+        let frame = frame_at(
+            model,
+            data,
+            pair,
+            c,
+            Tangent::Perp,
+            &mut self.frame,
+            &mut self.j_n,
+            &mut self.j_t,
+        )
+        .map_err(|e| e.at(t))?;
+        Ok(Some(Point {
+            pair,
+            local: l,
+            v_n: frame.v_n(),
+            v_t: frame.v_t(),
+            frame,
+        }))
+    }
+}
