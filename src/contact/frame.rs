@@ -92,15 +92,30 @@ pub fn contact_frame(
     j_n: &mut [Real],
     j_t: &mut [Real],
 ) -> Result<Option<ContactFrame>, ContactError> {
-    let Some(PairContact {
+    match pair_contact(model, data, pair, prediction)? {
+        Some(contact) => frame_of_contact(model, data, pair, &contact, ws, j_n, j_t).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// The contact frame of `pair` at a given contact (its closest features, or any other
+/// point of contact of the pair, e.g. from [`super::contact_points`]) and the rows `J_n`,
+/// `J_t`: [`contact_frame`] without the query.
+pub fn frame_of_contact(
+    model: &Model,
+    data: &Data,
+    pair: PairId,
+    contact: &PairContact,
+    ws: &mut FrameWorkspace,
+    j_n: &mut [Real],
+    j_t: &mut [Real],
+) -> Result<ContactFrame, ContactError> {
+    let PairContact {
         gap,
         point_a,
         point_b,
         normal,
-    }) = pair_contact(model, data, pair, prediction)?
-    else {
-        return Ok(None);
-    };
+    } = *contact;
     let p = model
         .pair(pair)
         .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
@@ -122,7 +137,7 @@ pub fn contact_frame(
         j_n[r] = n.dot(col);
         j_t[r] = t.dot(col);
     }
-    Ok(Some(ContactFrame {
+    Ok(ContactFrame {
         pair,
         gap,
         point_a,
@@ -131,7 +146,7 @@ pub fn contact_frame(
         t,
         v_r,
         v_rem,
-    }))
+    })
 }
 
 /// The velocity, remainder velocity and Jacobian of the point `p` of a collider's body;
