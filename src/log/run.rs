@@ -150,6 +150,48 @@ impl<W: Write + Seek> RunLogger<W> {
     }
 }
 
+impl<W: Write + Seek> RunLogger<W> {
+    /// Writes `/state` and `/tf` for the sample `s`, the mode of pair `k` with gap `g`
+    /// being `mode(k, g)`.
+    fn write_sample(
+        &mut self,
+        s: &Sample<'_>,
+        mode: impl Fn(usize, Real) -> ContactMode,
+    ) -> Result<(), ObserverError> {
+        // `/state`: the cached record with this sample's numbers.
+        let rec = &mut self.state;
+        rec.t = s.t;
+        rec.q.clear();
+        rec.q.extend_from_slice(s.q);
+        rec.u.clear();
+        rec.u.extend_from_slice(s.u);
+        rec.energy = Energy::new(s.energy.kinetic, s.energy.potential);
+        for (k, (c, &gap)) in rec.contacts.iter_mut().zip(s.gaps).enumerate() {
+            c.mode = mode(k, gap);
+            c.mode_code = c.mode.code();
+            c.gap = gap;
+        }
+        rec.mode = ContactMode::of_run(rec.contacts.iter().map(|c| c.mode));
+        rec.mode_code = rec.mode.code();
+        rec.impact_count = self.impacts;
+        self.writer.state(&self.state)?;
+        // `/tf`: the cached transforms with this sample's poses.
+        let time = Time::from_seconds(s.t)?;
+        for (tf, pose) in self.tf.transforms.iter_mut().zip(s.poses) {
+            let p = FoxglovePose::planar(
+                pose.translation.x,
+                pose.translation.y,
+                pose.rotation.angle(),
+            );
+            tf.timestamp = time;
+            tf.translation = p.position;
+            tf.rotation = p.orientation;
+        }
+        self.writer.transforms(s.t, &self.tf)?;
+        Ok(())
+    }
+}
+
 /// The bodies (frame-locked to their frames) and the obstacles (in `world`).
 fn scene_entities(model: &Model, bodies: &[String], t: Real) -> Result<SceneUpdate, LogError> {
     let style = DrawStyle::default();
@@ -189,41 +231,25 @@ fn planar(v: Vec2) -> Planar {
 
 impl<W: Write + Seek> Observer for RunLogger<W> {
     fn sample(&mut self, _model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
-        // `/state`: the cached record with this sample's numbers.
-        let rec = &mut self.state;
-        rec.t = s.t;
-        rec.q.clear();
-        rec.q.extend_from_slice(s.q);
-        rec.u.clear();
-        rec.u.extend_from_slice(s.u);
-        rec.energy = Energy::new(s.energy.kinetic, s.energy.potential);
-        for (c, &gap) in rec.contacts.iter_mut().zip(s.gaps) {
-            c.mode = if s.at_impact && gap <= self.gap_tol {
+        // Without modes from the run: an impact where the contact is closed at an impact
+        // instant, free elsewhere.
+        let gap_tol = self.gap_tol;
+        self.write_sample(s, |_, gap| {
+            if s.at_impact && gap <= gap_tol {
                 ContactMode::Impact
             } else {
                 ContactMode::Free
-            };
-            c.mode_code = c.mode.code();
-            c.gap = gap;
-        }
-        rec.mode = ContactMode::of_run(rec.contacts.iter().map(|c| c.mode));
-        rec.mode_code = rec.mode.code();
-        rec.impact_count = self.impacts;
-        self.writer.state(&self.state)?;
-        // `/tf`: the cached transforms with this sample's poses.
-        let time = Time::from_seconds(s.t)?;
-        for (tf, pose) in self.tf.transforms.iter_mut().zip(s.poses) {
-            let p = FoxglovePose::planar(
-                pose.translation.x,
-                pose.translation.y,
-                pose.rotation.angle(),
-            );
-            tf.timestamp = time;
-            tf.translation = p.position;
-            tf.rotation = p.orientation;
-        }
-        self.writer.transforms(s.t, &self.tf)?;
-        Ok(())
+            }
+        })
+    }
+
+    fn sample_with_modes(
+        &mut self,
+        _model: &Model,
+        s: &Sample<'_>,
+        modes: &[ContactMode],
+    ) -> Result<(), ObserverError> {
+        self.write_sample(s, |k, _| modes.get(k).copied().unwrap_or_default())
     }
 
     fn impact(&mut self, _model: &Model, ev: &ImpactEvent) -> Result<(), ObserverError> {

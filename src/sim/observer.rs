@@ -2,6 +2,7 @@
 //! ledger, and messages. The MCAP log implements [`Observer`]; so can a test.
 
 use crate::dynamics::Energy;
+use crate::log::ContactMode;
 use crate::math::{Pose, Real};
 use crate::model::Model;
 
@@ -50,6 +51,20 @@ pub trait Observer {
 
     /// A sample of the state.
     fn sample(&mut self, model: &Model, sample: &Sample<'_>) -> Result<(), ObserverError>;
+
+    /// A sample of the state with the mode of every contact pair (in pair order), from a
+    /// run that knows them (the Moreau–Jean time-stepping: free, sliding, sticking, or
+    /// impact from its contact problem). The default drops the modes and calls
+    /// [`Observer::sample`].
+    fn sample_with_modes(
+        &mut self,
+        model: &Model,
+        sample: &Sample<'_>,
+        modes: &[ContactMode],
+    ) -> Result<(), ObserverError> {
+        let _ = modes;
+        self.sample(model, sample)
+    }
 
     /// An impact (an entry of the ledger).
     fn impact(&mut self, model: &Model, impact: &ImpactEvent) -> Result<(), ObserverError>;
