@@ -20,6 +20,7 @@
 mod accumulation;
 mod gaps;
 mod impact_map;
+mod moreau_jean;
 mod observer;
 mod system;
 
@@ -28,6 +29,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 pub use accumulation::Scales;
 pub use gaps::GapFunctions;
 pub use impact_map::{ImpactEvent, ImpactMap, MaterialOverride};
+pub use moreau_jean::{MoreauJean, MoreauJeanSettings, SolverReport};
 pub use observer::{Level, NullObserver, Observer, ObserverError, Recorder, Sample};
 pub use system::MotionSystem;
 
