@@ -11,6 +11,7 @@
 //! - The discrete energy identity of the scheme (the audit's drift).
 //! - Nonsmooth Gauss–Seidel (`ricochet::pgs`) against the exact enumeration of
 //!   `ricochet::lcp` on random problems of two to four contacts.
+//! - `ricochet run --method moreau-jean --dt` writes the same kind of log.
 //!
 //! [AB] V. Acary, B. Brogliato, Numerical Methods for Nonsmooth Dynamical Systems,
 //! Springer (2008).
@@ -492,6 +493,56 @@ fn moreau_jean_is_not_an_ode_stepper_and_checks_its_settings() {
         let r = MoreauJean::new(&scene.model, &scene.settings, MaterialOverride::default());
         assert!(matches!(r, Err(SimError::Settings(_))), "dt = {dt}");
     }
+}
+
+#[test]
+fn ricochet_run_with_moreau_jean_writes_the_same_kind_of_log() {
+    let dir = std::env::temp_dir().join(format!("ricochet-mj-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("ball.mcap");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/bouncing_ball.toml");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_ricochet"))
+        .args([
+            "run",
+            scene,
+            "--method",
+            "moreau-jean",
+            "--dt",
+            "1e-3",
+            "-q",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let log = ricochet::log::read(&out).unwrap();
+    let settings = log.settings.as_ref().unwrap();
+    assert_eq!(settings["integrator"]["method"], "moreau-jean");
+    assert_eq!(settings["integrator"]["dt"], 1e-3);
+    let audit = log.audit.as_ref().unwrap();
+    assert!(
+        audit.stop_reason.starts_with("t_end"),
+        "{}",
+        audit.stop_reason
+    );
+    // 20 impacts above 5 g h before the ball rests (t∞ = 4.06 s), each a Newton impact
+    // with its Eq. (29).
+    assert_eq!(log.impacts.len(), 20);
+    assert!(
+        log.impacts
+            .iter()
+            .all(|i| i.law == ricochet::impact::Law::Newton && i.delta_e < 0.0)
+    );
+    // At 5 s the ball rests: the last /state has the contact sticking.
+    let last = log.last_state.as_ref().unwrap();
+    assert_eq!(last.contacts[0].mode, ContactMode::Sticking);
+    assert_eq!(log.count(ricochet::log::Topic::State), 2501);
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// A small deterministic generator (xorshift64*), so that every run sees the same
