@@ -14,8 +14,7 @@
 //! The solver sweeps the contacts in order; for contact `i` it freezes the others and
 //! solves its own 2×2 problem `w_i = A_ii x_i + r_i`, `r_i = b_i + Σ_{j≠i} A_ij x_j`,
 //! exactly (open, stick, or slide either way: [`solve_one`]). This is the nonsmooth
-//! Gauss–Seidel of Jean and Moreau ([J, Sect. 5]; [AB, Sect. 13.3]), which Siconos calls
-//! NSGS. It converges for frictionless problems with positive diagonal blocks (a projected
+//! Gauss–Seidel of Jean and Moreau [J; AB], which Siconos calls NSGS. It converges for frictionless problems with positive diagonal blocks (a projected
 //! Gauss–Seidel on a symmetric LCP); with friction convergence is not guaranteed, so the
 //! result carries a [`PgsStatus`].
 //!
