@@ -68,6 +68,7 @@ pub mod lcp;
 pub mod log;
 pub mod math;
 pub mod model;
+pub mod pgs;
 pub mod scene;
 pub mod settings;
 pub mod sim;

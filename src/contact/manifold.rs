@@ -12,8 +12,11 @@ use crate::math::{Real, perp};
 use crate::model::{Model, PairId};
 use crate::state::Data;
 
-/// The contact points of a pair: at most two in the plane.
-pub type ContactPoints = ArrayVec<PairContact, 2>;
+/// The most contact points of one pair in the plane: two (the ends of a flat contact).
+pub const MAX_CONTACT_POINTS: usize = 2;
+
+/// The contact points of a pair.
+pub type ContactPoints = ArrayVec<PairContact, MAX_CONTACT_POINTS>;
 
 /// Scratch of [`contact_points`], kept between calls so that they allocate nothing.
 #[derive(Default)]

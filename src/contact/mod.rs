@@ -15,4 +15,4 @@ mod penetration;
 
 pub use frame::{ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at};
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
-pub use manifold::{ContactPoints, ManifoldWorkspace, contact_points};
+pub use manifold::{ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points};

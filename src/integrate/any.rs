@@ -18,11 +18,21 @@ pub enum AnyStepper {
 
 impl AnyStepper {
     /// The stepper of `settings.method` for systems of dimension `n`, with the run's
-    /// tolerances, `dt` and `h_max` (the other DOPRI5 settings at their defaults).
+    /// tolerances, `dt` and `h_max` (the other DOPRI5 settings at their defaults). A
+    /// [`SettingsError`] for [`Method::MoreauJean`], which is not an ODE stepper.
     pub fn new(n: usize, settings: &IntegratorSettings) -> Result<Self, SettingsError> {
         Ok(match settings.method {
             Method::Dopri5 => AnyStepper::Dopri5(Dopri5::new(n, Dopri5Settings::from(settings))?),
             Method::Rk4 => AnyStepper::Rk4(Rk4::new(n, Rk4Settings::from(settings))?),
+            Method::MoreauJean => {
+                return Err(SettingsError {
+                    field: "method",
+                    value: Real::NAN,
+                    reason: "moreau-jean is a time-stepping scheme with its own loop \
+                             (sim::MoreauJean), not an ODE stepper: run it with MoreauJean, \
+                             not Simulation",
+                });
+            }
         })
     }
 }

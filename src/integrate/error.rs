@@ -75,14 +75,23 @@ where
 
 /// Invalid integrator settings, found when a stepper is built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("invalid integrator setting `{field}` = {value}: {reason}")]
+#[error("invalid integrator setting `{field}`{}: {reason}", value_text(.field, *.value))]
 pub struct SettingsError {
     /// The name of the setting.
     pub field: &'static str,
-    /// Its value.
+    /// Its value (not shown for `method`, which is not a number: NaN there).
     pub value: Real,
     /// What is required of it.
     pub reason: &'static str,
+}
+
+/// ` = value` for a numeric setting, nothing for the method.
+fn value_text(field: &str, value: Real) -> String {
+    if field == "method" {
+        String::new()
+    } else {
+        format!(" = {value}")
+    }
 }
 
 /// Checks that `value` is finite and strictly positive.

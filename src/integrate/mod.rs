@@ -1,5 +1,6 @@
 //! Time integration of `ẏ = f(t, y)`: DOPRI5(4) with dense output, RK4 with a fixed step.
-//! This module knows nothing about bodies or contacts.
+//! This module knows nothing about bodies or contacts. ([`Method`] also names the
+//! Moreau–Jean time-stepping scheme, which is not an ODE stepper: it lives in `sim`.)
 //!
 //! - [`OdeSystem`]: the system, whose right-hand side may fail.
 //! - [`Stepper`]: one accepted step at a time, the continuous extension (dense output) of
@@ -73,17 +74,25 @@ pub enum Method {
     Dopri5,
     /// The classical Runge–Kutta method of order 4 with a fixed step.
     Rk4,
+    /// The time-stepping scheme of Moreau and Jean with a fixed step `dt`: not an ODE
+    /// stepper (there is no [`Stepper`] for it); the run is `sim::MoreauJean`'s, which
+    /// solves the contacts at the velocity level in every step.
+    MoreauJean,
 }
 
 impl Method {
     /// Every method, in the order shown to users.
-    pub const ALL: [Method; 2] = [Method::Dopri5, Method::Rk4];
+    pub const ALL: [Method; 3] = [Method::Dopri5, Method::Rk4, Method::MoreauJean];
+
+    /// The methods that are ODE steppers ([`AnyStepper`] builds them).
+    pub const ODE: [Method; 2] = [Method::Dopri5, Method::Rk4];
 
     /// The name used on the command line and in scene files.
     pub fn name(self) -> &'static str {
         match self {
             Method::Dopri5 => "dopri5",
             Method::Rk4 => "rk4",
+            Method::MoreauJean => "moreau-jean",
         }
     }
 }
@@ -96,7 +105,7 @@ impl fmt::Display for Method {
 
 /// A method name that is not known.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown method `{0}` (expected one of: dopri5, rk4)")]
+#[error("unknown method `{0}` (expected one of: dopri5, rk4, moreau-jean)")]
 pub struct UnknownMethod(pub String);
 
 impl FromStr for Method {

@@ -207,6 +207,7 @@ impl<W: Write + Seek> Observer for RunLogger<W> {
                     PairMode::Free => ContactMode::Free,
                     PairMode::Sticking => ContactMode::Sticking,
                     PairMode::Sliding => ContactMode::Sliding,
+                    PairMode::Impact => ContactMode::Impact,
                 }
             };
             c.mode_code = c.mode.code();

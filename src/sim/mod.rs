@@ -24,6 +24,7 @@ mod contacts;
 mod error;
 pub mod gaps;
 mod impact_map;
+mod moreau_jean;
 mod observer;
 mod persistent;
 mod summary;
@@ -35,6 +36,7 @@ pub use accumulation::Scales;
 pub use error::{AtTime, Nested, SimError, StopReason};
 pub use gaps::GapFunctions;
 pub use impact_map::{ImpactCause, ImpactEvent, ImpactMap, MaterialOverride};
+pub use moreau_jean::{MoreauJean, MoreauJeanSettings, SolverReport};
 pub use observer::{
     Level, NullObserver, Observer, ObserverError, PairMode, Recorder, Sample, Transition,
 };

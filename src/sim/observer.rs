@@ -30,24 +30,30 @@ pub struct Sample<'a> {
 
 /// The mode of a contact pair: open, or closed and sticking or sliding (a pair with two
 /// closed points slides if either slides).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+///
+/// Ordered from the least to the most constrained.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum PairMode {
     /// Open (or touching without force).
     #[default]
     Free,
-    /// Closed, not slipping.
-    Sticking,
     /// Closed, slipping.
     Sliding,
+    /// Closed, not slipping.
+    Sticking,
+    /// An impulse in this time step (time-stepping only: the event-driven loop marks its
+    /// impact instants with [`Sample::at_impact`]).
+    Impact,
 }
 
 impl PairMode {
-    /// `free`, `sticking` or `sliding`.
+    /// `free`, `sticking`, `sliding` or `impact`.
     pub fn name(self) -> &'static str {
         match self {
             PairMode::Free => "free",
             PairMode::Sticking => "sticking",
             PairMode::Sliding => "sliding",
+            PairMode::Impact => "impact",
         }
     }
 }

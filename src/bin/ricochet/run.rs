@@ -15,8 +15,8 @@ use ricochet::log::{LogOptions, LogWriter, RunLogger};
 use ricochet::math::Real;
 use ricochet::model::Model;
 use ricochet::sim::{
-    ImpactEvent, Level, MaterialOverride, Observer, ObserverError, RunSummary, Sample, Simulation,
-    StopReason,
+    ImpactEvent, Level, MaterialOverride, MoreauJean, Observer, ObserverError, RunSummary, Sample,
+    Simulation, StopReason,
 };
 
 /// Options of `ricochet run`.
@@ -40,7 +40,7 @@ pub struct Args {
     /// Coefficient of friction for every contact, ≥ 0.
     #[arg(long, allow_negative_numbers = true)]
     mu: Option<Real>,
-    /// Integration method: dopri5, rk4.
+    /// Integration method: dopri5, rk4 (event-driven), moreau-jean (time-stepping).
     #[arg(long)]
     method: Option<Method>,
     /// Relative tolerance of DOPRI5.
@@ -49,7 +49,7 @@ pub struct Args {
     /// Absolute tolerance of DOPRI5.
     #[arg(long, allow_negative_numbers = true)]
     atol: Option<Real>,
-    /// Step of RK4 (s).
+    /// Step of RK4 and of Moreau–Jean (s).
     #[arg(long, allow_negative_numbers = true)]
     dt: Option<Real>,
     /// Print only the summary line, not the impact table and the audit.
@@ -162,8 +162,18 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .output
         .unwrap_or_else(|| PathBuf::from(format!("{}.mcap", scene.name)));
 
-    let mut sim = Simulation::new(&scene.model, &scene.settings, overrides)
-        .with_context(|| format!("{}: cannot simulate", args.scene.display()))?;
+    // The event-driven loop, or the Moreau–Jean time-stepping.
+    let mut runner = match scene.settings.integrator.method {
+        Method::MoreauJean => MoreauJean::new(&scene.model, &scene.settings, overrides)
+            .map(|mj| Runner::MoreauJean(Box::new(mj))),
+        Method::Dopri5 | Method::Rk4 => Simulation::new(&scene.model, &scene.settings, overrides)
+            .map(|sim| Runner::EventDriven(Box::new(sim))),
+    }
+    .with_context(|| format!("{}: cannot simulate", args.scene.display()))?;
+    let gap_tol = match &runner {
+        Runner::EventDriven(sim) => sim.scales().gap_tol,
+        Runner::MoreauJean(mj) => mj.scales().gap_tol,
+    };
     let writer = LogWriter::create(&output, LogOptions::default())?;
     let log = RunLogger::new(
         writer,
@@ -171,7 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         (&scene.name, &scene.text),
         (&scene.settings, &overrides),
         scene.initial.t,
-        sim.scales().gap_tol,
+        gap_tol,
     )?;
     let progress = std::io::stderr().is_terminal().then(|| {
         let bar = ProgressBar::new(1000);
@@ -192,7 +202,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 
     let interrupt = Arc::new(AtomicBool::new(false));
     install_interrupt(&interrupt)?;
-    let summary = sim.run(&scene.initial, &mut terminal, Some(&interrupt));
+    let summary = match &mut runner {
+        Runner::EventDriven(sim) => sim.run(&scene.initial, &mut terminal, Some(&interrupt)),
+        Runner::MoreauJean(mj) => mj.run(&scene.initial, &mut terminal, Some(&interrupt)),
+    };
     if let Some(bar) = &terminal.progress {
         bar.finish_and_clear();
     }
@@ -208,6 +221,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         StopReason::Interrupted { .. } => ExitCode::from(130),
         StopReason::Failed(_) => ExitCode::FAILURE,
     })
+}
+
+/// The loop that runs a scene.
+enum Runner<'m> {
+    /// Event-driven: an ODE stepper between located impacts.
+    EventDriven(Box<Simulation<'m>>),
+    /// Moreau–Jean time-stepping.
+    MoreauJean(Box<MoreauJean<'m>>),
 }
 
 /// On a first Ctrl-C the run stops at the next step and finishes its log; a second one
