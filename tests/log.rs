@@ -11,11 +11,10 @@
 //!
 //! Regenerate the fixture with `bash tests/data/regenerate.sh`.
 
-use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap};
 use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::path::PathBuf;
-use std::rc::Rc;
+use std::sync::{Arc, Mutex};
 
 use mcap::{MessageStream, Summary};
 use parry2d_f64::math::{Pose as Pose2, Vector};
@@ -297,7 +296,7 @@ fn synthetic() -> Run {
 }
 
 /// Writes the metadata and the first `n` events of `run`; the audit too when `n` is all.
-fn write_prefix<W: Write + Seek>(run: &Run, log: &mut LogWriter<W>, n: usize) {
+fn write_prefix<W: Write + Seek + Send + 'static>(run: &Run, log: &mut LogWriter<W>, n: usize) {
     log.scene(run.scene_name, run.scene_text).unwrap();
     log.settings(&run.settings).unwrap();
     for event in &run.events[..n] {
@@ -376,17 +375,17 @@ fn tmp_path(name: &str) -> PathBuf {
 /// A `Write + Seek` whose bytes can be looked at while a writer owns it: what a killed
 /// process leaves on disk (no user-space buffer).
 #[derive(Clone, Default)]
-struct SharedFile(Rc<RefCell<Cursor<Vec<u8>>>>);
+struct SharedFile(Arc<Mutex<Cursor<Vec<u8>>>>);
 
 impl SharedFile {
     fn snapshot(&self) -> Vec<u8> {
-        self.0.borrow().get_ref().clone()
+        self.0.lock().unwrap().get_ref().clone()
     }
 }
 
 impl Write for SharedFile {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.borrow_mut().write(buf)
+        self.0.lock().unwrap().write(buf)
     }
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
@@ -395,7 +394,7 @@ impl Write for SharedFile {
 
 impl Seek for SharedFile {
     fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
-        self.0.borrow_mut().seek(pos)
+        self.0.lock().unwrap().seek(pos)
     }
 }
 
@@ -783,6 +782,89 @@ fn a_dropped_writer_still_finishes_the_file() {
     let read = ricochet::log::read_bytes(&bytes).unwrap();
     assert_eq!(read.ending, Ending::Complete);
     assert_eq!(read.audit, None, "no audit: the run stopped early");
+}
+
+/// A file on a disk that fills up: writes beyond `capacity` bytes fail.
+struct FullDisk {
+    file: Cursor<Vec<u8>>,
+    capacity: u64,
+}
+
+impl Write for FullDisk {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.file.position() + buf.len() as u64 > self.capacity {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::StorageFull,
+                "disk full",
+            ));
+        }
+        self.file.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Seek for FullDisk {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.file.seek(pos)
+    }
+}
+
+/// The writer thread meets an I/O error: a later call (a write, `flush` or `finish`)
+/// reports it as an MCAP error, once; after it the writer refuses everything with
+/// `SinkFailed`; nothing hangs or panics.
+#[test]
+fn an_io_error_of_the_writer_thread_is_reported_by_a_later_call() {
+    let run = synthetic();
+    // Room for the first half of the run's messages, as written out (small chunks, so
+    // that the messages reach the disk while the run goes on).
+    let options = LogOptions {
+        chunk_size: 1024,
+        ..LogOptions::default()
+    };
+    let half = {
+        let file = SharedFile::default();
+        let mut log = LogWriter::new(file.clone(), options).unwrap();
+        write_prefix(&run, &mut log, run.events.len() / 2);
+        log.flush().unwrap();
+        file.snapshot().len() as u64
+    };
+    let disk = FullDisk {
+        file: Cursor::new(Vec::new()),
+        capacity: half,
+    };
+    let mut log = LogWriter::new(disk, options).unwrap();
+    let mut first = None;
+    for (k, event) in run.events.iter().enumerate() {
+        let result = match event {
+            Event::Scene(t, update) => log.scene_update(*t, update),
+            Event::Tf(t, tf) => log.transforms(*t, tf),
+            Event::State(s) => log.state(s),
+            Event::Impact(i) => log.impact(i),
+            Event::Log(t, level, msg) => log.log(*t, *level, msg),
+        };
+        if let Err(e) = result {
+            first = Some((k, e));
+            break;
+        }
+    }
+    // The error reaches the calling side at the latest at `flush`.
+    let (k, error) = match first {
+        Some(found) => found,
+        None => (run.events.len(), log.flush().unwrap_err()),
+    };
+    assert!(
+        k >= run.events.len() / 2,
+        "the first half fits on the disk, yet call {k} failed"
+    );
+    let LogError::Mcap(mcap::McapError::Io(io)) = &error else {
+        panic!("expected the disk's I/O error, got {error:?}");
+    };
+    assert_eq!(io.kind(), std::io::ErrorKind::StorageFull);
+    // Reported once; afterwards the writer has stopped.
+    assert!(matches!(log.state(&state(0)), Err(LogError::SinkFailed)));
+    assert!(matches!(log.finish(), Err(LogError::SinkFailed)));
 }
 
 #[test]

@@ -23,12 +23,11 @@
 //! - a writer that was never finished (a killed process) leaves a file that reads back up
 //!   to its last flush.
 
-use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap};
 use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::path::PathBuf;
-use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 
 use mcap::{MessageStream, Summary};
 use ricochet::impact::ImpactError;
@@ -69,17 +68,17 @@ fn load(name: &str) -> Scene {
 /// A `Write + Seek` whose bytes can be looked at while a writer owns it: what a killed
 /// process leaves on disk (no user-space buffer).
 #[derive(Clone, Default)]
-struct SharedFile(Rc<RefCell<Cursor<Vec<u8>>>>);
+struct SharedFile(Arc<Mutex<Cursor<Vec<u8>>>>);
 
 impl SharedFile {
     fn snapshot(&self) -> Vec<u8> {
-        self.0.borrow().get_ref().clone()
+        self.0.lock().unwrap().get_ref().clone()
     }
 }
 
 impl Write for SharedFile {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.borrow_mut().write(buf)
+        self.0.lock().unwrap().write(buf)
     }
     fn flush(&mut self) -> std::io::Result<()> {
         Ok(())
@@ -88,7 +87,7 @@ impl Write for SharedFile {
 
 impl Seek for SharedFile {
     fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
-        self.0.borrow_mut().seek(pos)
+        self.0.lock().unwrap().seek(pos)
     }
 }
 
@@ -112,7 +111,7 @@ enum Hook<'a> {
 }
 
 /// The run's observer: the log and a recorder of everything the log was given.
-struct Tee<'a, W: Write + Seek> {
+struct Tee<'a, W: Write + Seek + Send + 'static> {
     log: RunLogger<W>,
     seen: Recorder,
     hook: Hook<'a>,
@@ -120,7 +119,7 @@ struct Tee<'a, W: Write + Seek> {
     fired_at: Option<usize>,
 }
 
-impl<W: Write + Seek> Observer for Tee<'_, W> {
+impl<W: Write + Seek + Send + 'static> Observer for Tee<'_, W> {
     fn sample(&mut self, model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
         if let Hook::FailAfter(k) = self.hook
             && self.seen.samples.len() >= k
@@ -165,7 +164,7 @@ struct Run {
     snapshot: Option<(Vec<u8>, usize)>,
 }
 
-fn run_with<W: Write + Seek>(
+fn run_with<W: Write + Seek + Send + 'static>(
     scene: Scene,
     overrides: MaterialOverride,
     writer: LogWriter<W>,

@@ -32,6 +32,7 @@ mod reader;
 mod records;
 mod run;
 pub mod schemas;
+mod sink;
 mod writer;
 
 pub use foxglove::{
@@ -113,4 +114,11 @@ pub enum LogError {
     /// An error of the MCAP layer: I/O, or a file that is not MCAP.
     #[error("MCAP error")]
     Mcap(#[from] mcap::McapError),
+    /// The thread that writes the log could not be started.
+    #[error("cannot start the log writer thread")]
+    Thread(#[source] std::io::Error),
+    /// The log writer stopped after an error that was already reported (or its thread
+    /// ended unexpectedly); nothing more is written.
+    #[error("the log writer has stopped after an earlier error")]
+    SinkFailed,
 }

@@ -35,7 +35,7 @@ const OBSTACLE: (f64, f64, f64) = (0.6, 0.6, 0.6);
 /// Writes a run to an MCAP log as it goes: `/state` and `/tf` at each sample, `/impacts`
 /// and an impulse arrow on `/scene` at each impact, `/log` for messages; the scene text,
 /// the settings and, at the end, the energy audit as metadata.
-pub struct RunLogger<W: Write + Seek> {
+pub struct RunLogger<W: Write + Seek + Send + 'static> {
     writer: LogWriter<W>,
     /// Pair names `<collider a>/<collider b>`, in pair order.
     pairs: Vec<String>,
@@ -51,7 +51,7 @@ pub struct RunLogger<W: Write + Seek> {
     tf: FrameTransforms,
 }
 
-impl<W: Write + Seek> RunLogger<W> {
+impl<W: Write + Seek + Send + 'static> RunLogger<W> {
     /// Starts the log of a run of `model`: writes the scene (`name`, file `text`), the
     /// `settings` with the material `overrides` (so that the log describes the run it
     /// holds), and the bodies and obstacles on `/scene` at `t0`.
@@ -189,7 +189,7 @@ fn planar(v: Vec2) -> Planar {
     Planar { x: v.x, y: v.y }
 }
 
-impl<W: Write + Seek> Observer for RunLogger<W> {
+impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
     fn sample(&mut self, _model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
         // `/state`: the cached record with this sample's numbers.
         let rec = &mut self.state;

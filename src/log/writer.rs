@@ -13,6 +13,7 @@ use super::LogError;
 use super::foxglove::{FrameTransforms, Log, LogLevel, SceneUpdate, Time, nanoseconds};
 use super::records::{Audit, ImpactRecord, StateRecord};
 use super::schemas::{MESSAGE_ENCODING, SCHEMA_ENCODING, Topic, metadata};
+use super::sink::Sink;
 
 /// Compression of the MCAP chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -62,10 +63,17 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 /// [`LogError::NonFinite`] naming the field (JSON has no such numbers). A refused message
 /// is not written, and the writer stays usable.
 ///
+/// The messages are encoded as JSON on the calling thread; the `mcap::Writer` (which
+/// compresses the chunks and writes them out) runs on a thread of its own, fed in order
+/// through a bounded channel, so that logging overlaps with the simulation and the bytes
+/// are the same as a single-threaded writer's (see `sink.rs`). An I/O error is therefore
+/// reported by the call after the one whose message met it (or by `flush`, `finish`).
+///
 /// Ending a run: call [`finish`](LogWriter::finish), which writes the summary section and
 /// reports any I/O error. If the writer is dropped instead (an early return on error, a
 /// panic unwinding), `mcap::Writer`'s `Drop` still finishes the file, ignoring errors: the
-/// log is a valid MCAP file holding everything written so far. A process that is killed
+/// log is a valid MCAP file holding everything written so far (dropping waits for the
+/// writer thread). A process that is killed
 /// outright leaves a file without a summary; [`read`](super::read()) (and `mcap`'s
 /// `MessageStream`) still read it up to the last complete chunk, so call
 /// [`flush`](LogWriter::flush) at points worth keeping.
@@ -81,13 +89,13 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 /// # Ok(())
 /// # }
 /// ```
-pub struct LogWriter<W: Write + Seek> {
-    mcap: mcap::Writer<W>,
+pub struct LogWriter<W: Write + Seek + Send + 'static> {
+    mcap: Sink<W>,
     /// Channel id of each topic, indexed by [`Topic::index`].
     channels: [u16; Topic::ALL.len()],
     /// Next sequence number of each topic.
     sequences: [u32; Topic::ALL.len()],
-    /// The serialized message, reused from one to the next.
+    /// The message being serialized (a buffer recycled from the writer thread).
     buffer: Vec<u8>,
 }
 
@@ -103,7 +111,7 @@ impl LogWriter<BufWriter<File>> {
     }
 }
 
-impl<W: Write + Seek> LogWriter<W> {
+impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     /// Starts a log in `writer`: the MCAP header, then the schemas and channels of every
     /// topic, in a first chunk that is flushed at once.
     pub fn new(writer: W, options: LogOptions) -> Result<Self, LogError> {
@@ -120,7 +128,7 @@ impl<W: Write + Seek> LogWriter<W> {
         }
         mcap.flush()?;
         Ok(LogWriter {
-            mcap,
+            mcap: Sink::spawn(mcap)?,
             channels,
             sequences: [0; Topic::ALL.len()],
             buffer: Vec::new(),
@@ -210,16 +218,13 @@ impl<W: Write + Seek> LogWriter<W> {
     /// Closes the current chunk and flushes it to the underlying writer, so that a process
     /// killed later still leaves everything written so far readable.
     pub fn flush(&mut self) -> Result<(), LogError> {
-        Ok(self.mcap.flush()?)
+        self.mcap.flush()
     }
 
     /// Finishes the file (the summary section, the footer) and returns the underlying
     /// writer, flushed.
-    pub fn finish(mut self) -> Result<W, LogError> {
-        self.mcap.finish()?;
-        let mut inner = self.mcap.into_inner();
-        inner.flush().map_err(mcap::McapError::from)?;
-        Ok(inner)
+    pub fn finish(self) -> Result<W, LogError> {
+        self.mcap.finish()
     }
 
     /// Serializes `message` and writes it on `topic` at simulated time `t` (s).
@@ -250,6 +255,9 @@ impl<W: Write + Seek> LogWriter<W> {
 
     /// Serializes `message` into the reused buffer.
     fn encode<M: Serialize>(&mut self, topic: Topic, message: &M) -> Result<(), LogError> {
+        if self.buffer.capacity() == 0 {
+            self.buffer = self.mcap.buffer();
+        }
         self.buffer.clear();
         serde_json::to_writer(&mut self.buffer, message).map_err(|source| LogError::Encode {
             what: topic.name(),
@@ -259,7 +267,7 @@ impl<W: Write + Seek> LogWriter<W> {
 
     /// Writes the buffer on `topic` at `time` (ns).
     fn write_encoded(&mut self, topic: Topic, time: u64) -> Result<(), LogError> {
-        let data = &self.buffer;
+        let data = std::mem::take(&mut self.buffer);
         let i = topic.index();
         let header = MessageHeader {
             channel_id: self.channels[i],
@@ -267,17 +275,16 @@ impl<W: Write + Seek> LogWriter<W> {
             log_time: time,
             publish_time: time,
         };
-        self.mcap.write_to_known_channel(&header, data)?;
+        self.mcap.message(header, data)?;
         self.sequences[i] = self.sequences[i].wrapping_add(1);
         Ok(())
     }
 
     fn metadata(&mut self, name: &str, map: BTreeMap<String, String>) -> Result<(), LogError> {
-        self.mcap.write_metadata(&Metadata {
+        self.mcap.metadata(Metadata {
             name: name.to_owned(),
             metadata: map,
-        })?;
-        Ok(())
+        })
     }
 }
 

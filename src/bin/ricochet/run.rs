@@ -72,14 +72,14 @@ struct Row {
 }
 
 /// The observer of the command: the log, a progress bar, the impact table.
-struct Terminal<W: Write + Seek> {
+struct Terminal<W: Write + Seek + Send + 'static> {
     log: RunLogger<W>,
     progress: Option<ProgressBar>,
     t_end: Real,
     rows: Vec<Row>,
 }
 
-impl<W: Write + Seek> Observer for Terminal<W> {
+impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
     fn sample(&mut self, model: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
         if let Some(bar) = &self.progress {
             bar.set_position((1000.0 * s.t / self.t_end) as u64);
