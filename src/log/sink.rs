@@ -2,18 +2,21 @@
 //! writing them out overlaps with the simulation.
 //!
 //! The simulation thread encodes each message as JSON (where a bad number is caught and
-//! reported at once) and sends the bytes; the sink thread writes them to the
-//! `mcap::Writer`, which compresses a chunk when it is full. The commands go through one
-//! bounded channel, in order, so the file's bytes are those a writer on the calling thread
-//! would produce: two runs of the same scene still give byte-identical logs. The message
-//! buffers come back through a second channel and are reused, so that a run in its steady
-//! state allocates nothing per message.
+//! reported at once) into a [`Batch`]; a full batch goes to the sink thread, which writes
+//! its messages to the `mcap::Writer` (that compresses a chunk when it is full). Batches
+//! and metadata go through one bounded channel, in order, so the file's bytes are those a
+//! writer on the calling thread would produce: two runs of the same scene still give
+//! byte-identical logs. Sending messages in batches keeps the cost of the channel (a
+//! wake-up of the other thread) off each message. The batches come back through a
+//! second channel and are reused, so that a run in its steady state allocates nothing
+//! per message.
 //!
-//! Errors: an I/O error met on the sink thread is kept and returned by the next call
-//! on the calling side (a write, [`Sink::flush`] or [`Sink::finish`]); what follows it is not
+//! Errors: an I/O error met on the sink thread is kept and returned by a later call on the
+//! calling side (a message, [`Sink::flush`] or [`Sink::finish`]); what follows it is not
 //! written. A sink dropped without [`Sink::finish`] (an early return, a panic unwinding)
-//! closes the channel and waits for the thread, which drops the `mcap::Writer`: its `Drop`
-//! finishes the file, so the log stays a valid MCAP file holding everything sent so far.
+//! sends its open batch, closes the channel and waits for the thread, which drops the
+//! `mcap::Writer`: its `Drop` finishes the file, so the log stays a valid MCAP file
+//! holding everything given so far.
 
 use std::io::{Seek, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -26,17 +29,41 @@ use mcap::records::{MessageHeader, Metadata};
 
 use super::LogError;
 
-/// Messages that may wait in the channel for the sink thread. A full channel makes the
+/// Batches that may wait in the channel for the sink thread. A full channel makes the
 /// simulation wait (back-pressure) rather than grow without bound.
-const QUEUE: usize = 256;
+const QUEUE: usize = 8;
+
+/// A batch is sent when it holds this many messages…
+const BATCH_MESSAGES: usize = 64;
+
+/// …or this many bytes.
+const BATCH_BYTES: usize = 64 * 1024;
+
+/// Messages encoded one after the other in one buffer.
+#[derive(Default)]
+pub(super) struct Batch {
+    /// Each message's header and the end of its bytes in `bytes` (it starts where the
+    /// previous one ends).
+    messages: Vec<(MessageHeader, usize)>,
+    /// The messages' JSON bytes, back to back.
+    bytes: Vec<u8>,
+}
+
+impl Batch {
+    fn clear(&mut self) {
+        self.messages.clear();
+        self.bytes.clear();
+    }
+
+    fn is_full(&self) -> bool {
+        self.messages.len() >= BATCH_MESSAGES || self.bytes.len() >= BATCH_BYTES
+    }
+}
 
 /// What the sink thread is asked to do, in order.
 enum Command {
-    /// Write a message (its JSON bytes) to a known channel.
-    Message {
-        header: MessageHeader,
-        data: Vec<u8>,
-    },
+    /// Write the messages of a batch to their known channels.
+    Messages(Batch),
     /// Write a metadata record.
     Metadata(Metadata),
     /// Close the current chunk, flush it, and answer.
@@ -76,8 +103,10 @@ impl Failure {
 /// The `mcap::Writer` on its own thread (see the module doc).
 pub(super) struct Sink<W: Write + Seek + Send + 'static> {
     commands: Option<SyncSender<Command>>,
-    /// Message buffers coming back from the sink thread, for reuse.
-    spare: Receiver<Vec<u8>>,
+    /// The batch being filled.
+    open: Batch,
+    /// Batches coming back from the sink thread, for reuse.
+    spare: Receiver<Batch>,
     failure: Arc<Failure>,
     thread: Option<JoinHandle<Option<Result<W, McapError>>>>,
 }
@@ -95,31 +124,43 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             .map_err(LogError::Thread)?;
         Ok(Sink {
             commands: Some(commands),
+            open: Batch::default(),
             spare,
             failure,
             thread: Some(thread),
         })
     }
 
-    /// An empty buffer to encode the next message into: a returned one if any.
-    pub(super) fn buffer(&mut self) -> Vec<u8> {
-        let mut buffer = self.spare.try_recv().unwrap_or_default();
-        buffer.clear();
-        buffer
+    /// The buffer to encode the next message into: append its bytes, then call
+    /// [`push`](Self::push) with the length the buffer had before, or truncate it back
+    /// to that length to drop the message.
+    pub(super) fn buffer(&mut self) -> &mut Vec<u8> {
+        &mut self.open.bytes
     }
 
-    /// Sends a message (its bytes in `data`) to be written with `header`.
-    pub(super) fn message(&mut self, header: MessageHeader, data: Vec<u8>) -> Result<(), LogError> {
-        self.send(Command::Message { header, data })
+    /// Adds the message encoded in [`buffer`](Self::buffer) from `start` on, to be
+    /// written with `header`.
+    pub(super) fn push(&mut self, header: MessageHeader, start: usize) -> Result<(), LogError> {
+        if let Err(e) = self.failure.take() {
+            self.open.bytes.truncate(start);
+            return Err(e);
+        }
+        self.open.messages.push((header, self.open.bytes.len()));
+        if self.open.is_full() {
+            self.send_batch()?;
+        }
+        Ok(())
     }
 
-    /// Sends a metadata record to be written.
+    /// Sends a metadata record to be written (after the messages given before it).
     pub(super) fn metadata(&mut self, metadata: Metadata) -> Result<(), LogError> {
+        self.send_batch()?;
         self.send(Command::Metadata(metadata))
     }
 
-    /// Waits until everything sent so far is written and flushed out of the writer.
+    /// Waits until everything given so far is written and flushed out of the writer.
     pub(super) fn flush(&mut self) -> Result<(), LogError> {
+        self.send_batch()?;
         let (answer, reply) = sync_channel(1);
         self.send(Command::Flush(answer))?;
         let result = reply.recv().map_err(|_| LogError::SinkFailed)?;
@@ -129,6 +170,7 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
 
     /// Finishes the file and returns the underlying writer.
     pub(super) fn finish(mut self) -> Result<W, LogError> {
+        self.send_batch()?;
         self.send(Command::Finish)?;
         self.commands = None;
         let thread = self.thread.take().ok_or(LogError::SinkFailed)?;
@@ -142,6 +184,17 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         }
     }
 
+    /// Sends the open batch, if it holds anything, and opens a spare one.
+    fn send_batch(&mut self) -> Result<(), LogError> {
+        if self.open.messages.is_empty() {
+            return Ok(());
+        }
+        let mut next = self.spare.try_recv().unwrap_or_default();
+        next.clear();
+        let full = std::mem::replace(&mut self.open, next);
+        self.send(Command::Messages(full))
+    }
+
     fn send(&mut self, command: Command) -> Result<(), LogError> {
         self.failure.take()?;
         let commands = self.commands.as_ref().ok_or(LogError::SinkFailed)?;
@@ -150,9 +203,10 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
 }
 
 impl<W: Write + Seek + Send + 'static> Drop for Sink<W> {
-    /// Closes the channel and waits for the thread, which finishes the file if
-    /// [`Sink::finish`] was not called.
+    /// Sends the open batch, closes the channel and waits for the thread, which finishes
+    /// the file if [`Sink::finish`] was not called.
     fn drop(&mut self) {
+        let _ = self.send_batch();
         self.commands = None;
         if let Some(thread) = self.thread.take() {
             let _ = thread.join();
@@ -166,19 +220,26 @@ impl<W: Write + Seek + Send + 'static> Drop for Sink<W> {
 fn serve<W: Write + Seek>(
     mut mcap: mcap::Writer<W>,
     inbox: &Receiver<Command>,
-    recycle: &SyncSender<Vec<u8>>,
+    recycle: &SyncSender<Batch>,
     failure: &Failure,
 ) -> Option<Result<W, McapError>> {
     let mut broken = false;
     for command in inbox {
         match command {
-            Command::Message { header, data } => {
-                if !broken && let Err(e) = mcap.write_to_known_channel(&header, &data) {
-                    broken = true;
-                    failure.set(e);
+            Command::Messages(batch) => {
+                let mut start = 0;
+                for (header, end) in &batch.messages {
+                    if broken {
+                        break;
+                    }
+                    if let Err(e) = mcap.write_to_known_channel(header, &batch.bytes[start..*end]) {
+                        broken = true;
+                        failure.set(e);
+                    }
+                    start = *end;
                 }
-                // The buffer goes back for reuse; if the pool is full, it is dropped.
-                let _ = recycle.try_send(data);
+                // The batch goes back for reuse; if the pool is full, it is dropped.
+                let _ = recycle.try_send(batch);
             }
             Command::Metadata(metadata) => {
                 if !broken && let Err(e) = mcap.write_metadata(&metadata) {

@@ -95,8 +95,6 @@ pub struct LogWriter<W: Write + Seek + Send + 'static> {
     channels: [u16; Topic::ALL.len()],
     /// Next sequence number of each topic.
     sequences: [u32; Topic::ALL.len()],
-    /// The message being serialized (a buffer recycled from the writer thread).
-    buffer: Vec<u8>,
 }
 
 impl LogWriter<BufWriter<File>> {
@@ -131,7 +129,6 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
             mcap: Sink::spawn(mcap)?,
             channels,
             sequences: [0; Topic::ALL.len()],
-            buffer: Vec::new(),
         })
     }
 
@@ -230,8 +227,8 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     /// Serializes `message` and writes it on `topic` at simulated time `t` (s).
     fn write<M: Serialize>(&mut self, topic: Topic, t: f64, message: &M) -> Result<(), LogError> {
         let time = nanoseconds(t)?;
-        self.encode(topic, message)?;
-        self.write_encoded(topic, time)
+        let start = self.encode(topic, message)?;
+        self.write_encoded(topic, time, start)
     }
 
     /// [`write`](Self::write) for a message whose numbers are not checked beforehand:
@@ -246,28 +243,34 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         message: &M,
     ) -> Result<(), LogError> {
         let time = nanoseconds(t)?;
-        self.encode(topic, message)?;
-        if self.buffer.windows(4).any(|w| w == b"null") {
-            check_finite(topic, t, message)?;
+        let start = self.encode(topic, message)?;
+        let encoded = &self.mcap.buffer()[start..];
+        if encoded.windows(4).any(|w| w == b"null")
+            && let Err(e) = check_finite(topic, t, message)
+        {
+            self.mcap.buffer().truncate(start);
+            return Err(e);
         }
-        self.write_encoded(topic, time)
+        self.write_encoded(topic, time, start)
     }
 
-    /// Serializes `message` into the reused buffer.
-    fn encode<M: Serialize>(&mut self, topic: Topic, message: &M) -> Result<(), LogError> {
-        if self.buffer.capacity() == 0 {
-            self.buffer = self.mcap.buffer();
-        }
-        self.buffer.clear();
-        serde_json::to_writer(&mut self.buffer, message).map_err(|source| LogError::Encode {
-            what: topic.name(),
-            source,
-        })
+    /// Appends `message`'s JSON to the sink's buffer; returns where it starts. On an
+    /// error the buffer is left as it was.
+    fn encode<M: Serialize>(&mut self, topic: Topic, message: &M) -> Result<usize, LogError> {
+        let buffer = self.mcap.buffer();
+        let start = buffer.len();
+        serde_json::to_writer(&mut *buffer, message).map_err(|source| {
+            buffer.truncate(start);
+            LogError::Encode {
+                what: topic.name(),
+                source,
+            }
+        })?;
+        Ok(start)
     }
 
-    /// Writes the buffer on `topic` at `time` (ns).
-    fn write_encoded(&mut self, topic: Topic, time: u64) -> Result<(), LogError> {
-        let data = std::mem::take(&mut self.buffer);
+    /// Hands the message encoded from `start` on to the sink, on `topic` at `time` (ns).
+    fn write_encoded(&mut self, topic: Topic, time: u64, start: usize) -> Result<(), LogError> {
         let i = topic.index();
         let header = MessageHeader {
             channel_id: self.channels[i],
@@ -275,7 +278,7 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
             log_time: time,
             publish_time: time,
         };
-        self.mcap.message(header, data)?;
+        self.mcap.push(header, start)?;
         self.sequences[i] = self.sequences[i].wrapping_add(1);
         Ok(())
     }
