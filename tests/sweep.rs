@@ -257,9 +257,9 @@ fn a_sweep_of_the_bouncing_ball_agrees_with_single_runs_and_the_closed_forms() {
         .run(Shard::ALL, NonZeroUsize::new(2), &|_| {})
         .unwrap();
     assert_eq!(rows.len(), 18);
-    let (m, r, h0, g) = (0.1, 0.1, 1.0, 9.81);
-    let t1 = (2.0 * h0 / g as f64).sqrt();
-    let v1 = (2.0 * g * h0 as f64).sqrt();
+    let (m, r, h0, g): (f64, f64, f64, f64) = (0.1, 0.1, 1.0, 9.81);
+    let t1 = (2.0 * h0 / g).sqrt();
+    let v1 = (2.0 * g * h0).sqrt();
     let mut impacts_seen = Vec::new();
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(row.index, k);
