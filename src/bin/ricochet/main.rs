@@ -8,6 +8,7 @@ mod check;
 mod impact;
 mod inspect;
 mod run;
+mod sweep;
 
 /// Planar multibody simulator with event-driven rigid impacts.
 #[derive(Parser)]
@@ -27,6 +28,9 @@ enum Command {
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
+    /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
+    /// of it, or merge the shards.
+    Sweep(sweep::Args),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +40,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args),
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Sweep(args) => sweep::run(args),
     };
     match result {
         Ok(code) => code,
