@@ -108,8 +108,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     stops.sort();
     let stops: Vec<String> = stops.iter().map(|(s, n)| format!("{n} {s}")).collect();
+    let threads = match threads {
+        1 => "1 thread".to_owned(),
+        n => format!("{n} threads"),
+    };
     println!(
-        "{}: {runs} of {} runs (shard {shard}) on {threads} threads in {elapsed:.2} s; stops: {}\nwrote {}",
+        "{}: {runs} of {} runs (shard {shard}) on {threads} in {elapsed:.2} s; stops: {}\nwrote {}",
         scene.name,
         sweep.grid().len(),
         if stops.is_empty() {
