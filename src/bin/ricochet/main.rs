@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod check;
 mod impact;
 mod inspect;
+mod regions;
 mod run;
 
 /// Planar multibody simulator with event-driven rigid impacts.
@@ -27,6 +28,8 @@ enum Command {
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
+    /// Draw maps (SVG) of the collision type and the sign of ΔE over the (α, μ) plane, for each law.
+    Regions(regions::Args),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +39,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args),
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Regions(args) => regions::run(args),
     };
     match result {
         Ok(code) => code,
