@@ -30,17 +30,17 @@ pub struct Args {
     #[arg(long, requires = "scene")]
     pair: Option<String>,
     /// Coefficient of restitution (default with `--scene`: the pair's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     e: Option<f64>,
     /// The laws to map, comma-separated: newton, kane-levinson, poisson, stronge (default:
     /// all four).
     #[arg(long, value_delimiter = ',')]
     law: Vec<Law>,
     /// The map spans α ∈ [−ALPHA_MAX, ALPHA_MAX].
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 4.0, allow_negative_numbers = true)]
     alpha_max: f64,
     /// The map spans μ ∈ [0, MU_MAX].
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     mu_max: f64,
     /// Nodes along each axis (each node is one cell of the picture).
     #[arg(long, default_value_t = 201)]
