@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{Boundary, BoundaryKind, Cell, RegionMap};
 use crate::impact::{CollisionType, Law};
@@ -207,14 +208,21 @@ fn draw_chart<DB: DrawingBackend>(
         chart
             .draw_series([Circle::new((mk.alpha, mk.mu), 5, BLACK.filled())])
             .map_err(plot_error)?;
+        // The label goes away from the middle, where the boundaries usually are not.
+        let (h, dx) = if mk.alpha <= 0.5 * (a.min + a.max) {
+            (HPos::Left, 0.012)
+        } else {
+            (HPos::Right, -0.012)
+        };
+        let font = TextStyle::from(("sans-serif", 14).into_font()).pos(Pos::new(h, VPos::Bottom));
         chart
             .draw_series([Text::new(
                 mk.label.clone(),
                 (
-                    mk.alpha + 0.012 * (a.max - a.min),
+                    mk.alpha + dx * (a.max - a.min),
                     mk.mu + 0.012 * (m.max - m.min),
                 ),
-                ("sans-serif", 14),
+                font,
             )])
             .map_err(plot_error)?;
     }
