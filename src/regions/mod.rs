@@ -317,8 +317,8 @@ impl RegionMap {
             .map(move |(k, c)| (a.value(k % a.n), m.value(k / a.n), *c))
     }
 
-    /// The two boundary curves clipped to the map, each sampled at about `2 samples`
-    /// points per piece.
+    /// The two boundary curves clipped to the map ([`boundary`]): `α = (1+e) r_m(μ)`, then
+    /// `α = −(1+e) r_p(μ)`, with up to `2 samples` points per piece.
     pub fn boundaries(&self, samples: usize) -> [Boundary; 2] {
         let s = &self.spec;
         [BoundaryKind::ForwardSliding, BoundaryKind::Mirrored].map(|kind| {
