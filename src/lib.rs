@@ -69,6 +69,7 @@ pub mod log;
 pub mod math;
 pub mod model;
 pub mod pgs;
+pub mod regions;
 pub mod scene;
 pub mod settings;
 pub mod sim;

@@ -237,6 +237,42 @@ impl ImpactMap {
         .map_err(|e| SimError::at(t, e))
     }
 
+    /// The frame (tangent along the slip) and `W = J M⁻¹ Jᵀ` of `pair` at its contact point
+    /// `contact`, at `(t, q, u)`, without applying any impulse: what the impact law would
+    /// be given there (`ricochet regions` maps it).
+    ///
+    /// Implements [P, Eq. (20)]: `m_nn = J_n M⁻¹ J_nᵀ`, `m_nt = J_n M⁻¹ J_tᵀ`,
+    /// `m_tt = J_t M⁻¹ J_tᵀ`, with the rows of [`crate::contact::frame_at`].
+    pub fn impact_matrix(
+        &mut self,
+        model: &Model,
+        point: (PairId, PairContact),
+        t: Real,
+        q: &[Real],
+        u: &[Real],
+    ) -> Result<(ContactFrame, ImpactMatrix), SimError> {
+        let frame = self.frame_at_point(model, point, t, q, u)?;
+        let w = self.impact_matrix_of_rows(model, t)?;
+        Ok((frame, w))
+    }
+
+    /// `W = J M⁻¹ Jᵀ` [P, Eq. (20)] from the rows left in `j_n`, `j_t` by the last frame,
+    /// at the positions in `data`; `M⁻¹ J_nᵀ`, `M⁻¹ J_tᵀ` are left in `x_n`, `x_t`.
+    fn impact_matrix_of_rows(&mut self, model: &Model, t: Real) -> Result<ImpactMatrix, SimError> {
+        mass_matrix(model, &mut self.data);
+        factor_mass_matrix(&mut self.data, t).map_err(|e| SimError::at(t, e))?;
+        self.x_n.copy_from_slice(&self.j_n);
+        self.x_t.copy_from_slice(&self.j_t);
+        solve_mass(&self.data, &mut self.x_n).map_err(|e| SimError::at(t, e))?;
+        solve_mass(&self.data, &mut self.x_t).map_err(|e| SimError::at(t, e))?;
+        let dot = |a: &[Real], b: &[Real]| a.iter().zip(b).map(|(x, y)| x * y).sum::<Real>();
+        Ok(ImpactMatrix::new(
+            dot(&self.j_n, &self.x_n),
+            0.5 * (dot(&self.j_n, &self.x_t) + dot(&self.j_t, &self.x_n)),
+            dot(&self.j_t, &self.x_t),
+        ))
+    }
+
     /// Applies the impact of `pair` at its closest points at `(t, q, u)`: see
     /// [`ImpactMap::apply_at`].
     pub fn apply(
@@ -294,18 +330,7 @@ impl ImpactMap {
             _ => {}
         }
         // 2. W = J M⁻¹ Jᵀ.
-        mass_matrix(model, &mut self.data);
-        factor_mass_matrix(&mut self.data, t).map_err(|e| SimError::at(t, e))?;
-        self.x_n.copy_from_slice(&self.j_n);
-        self.x_t.copy_from_slice(&self.j_t);
-        solve_mass(&self.data, &mut self.x_n).map_err(|e| SimError::at(t, e))?;
-        solve_mass(&self.data, &mut self.x_t).map_err(|e| SimError::at(t, e))?;
-        let dot = |a: &[Real], b: &[Real]| a.iter().zip(b).map(|(x, y)| x * y).sum::<Real>();
-        let w = ImpactMatrix::new(
-            dot(&self.j_n, &self.x_n),
-            0.5 * (dot(&self.j_n, &self.x_t) + dot(&self.j_t, &self.x_n)),
-            dot(&self.j_t, &self.x_t),
-        );
+        let w = self.impact_matrix_of_rows(model, t)?;
         // 3. The impact law.
         let problem = ImpactProblem::new(w, v_a, material.e, material.mu);
         let mut outcome =

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod check;
 mod impact;
 mod inspect;
+mod regions;
 mod run;
 mod sweep;
 
@@ -31,6 +32,8 @@ enum Command {
     /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
     /// of it, or merge the shards.
     Sweep(sweep::Args),
+    /// Draw maps (SVG) of the collision type and the sign of ΔE over the (α, μ) plane, for each law.
+    Regions(regions::Args),
 }
 
 fn main() -> ExitCode {
@@ -41,6 +44,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::Regions(args) => regions::run(args),
     };
     match result {
         Ok(code) => code,
