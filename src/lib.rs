@@ -73,3 +73,4 @@ pub mod scene;
 pub mod settings;
 pub mod sim;
 pub mod state;
+pub mod workprec;

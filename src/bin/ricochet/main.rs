@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod bench;
 mod check;
 mod impact;
 mod inspect;
@@ -27,6 +28,8 @@ enum Command {
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
+    /// Measure work-precision (error against wall time) of the methods, and the chain scaling; write CSV and SVG charts.
+    Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +39,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args),
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(code) => code,
