@@ -31,8 +31,8 @@ impl Ball {
     /// impact at `t₁ = √(2 h₀/g)` with speed `v₁ = √(2 g h₀)`, `h₀ = y₀ − r`; impact k + 1
     /// leaves at `v_k = e^k v₁` and the flight after it lasts `2 v_k / g`; the energy after
     /// impact k is `½ m v_k² + m g r`; in flight `y = r + v_k τ − ½ g τ²`, `u = v_k − g τ`.
-    /// This is Newton's law with `W` scalar and no friction [P, Eq. (47)] in its
-    /// one-degree-of-freedom form `v⁺ = −e v⁻`.
+    /// The impacts follow Newton's hypothesis [P, Sect. 3] without friction and with one
+    /// degree of freedom: `v_n^S = −e v_n^A`.
     pub fn closed_form(&self, t_end: Real) -> Trace {
         let Ball { g, y0, r, m, e } = *self;
         let h0 = y0 - r;

@@ -79,7 +79,9 @@ pub struct ChainRow {
     pub impacts: u64,
     /// Wall time of one right-hand-side evaluation, measured alone (s).
     pub rhs_eval_s: Real,
-    /// Estimated share of the run spent in the right-hand side: `rhs_evals · rhs_eval_s / wall`.
+    /// Estimated share of the run spent in the integrator's right-hand-side evaluations:
+    /// `rhs_evals · rhs_eval_s / wall` (the event locator's rates run the forward
+    /// dynamics too, outside this counter).
     pub rhs_share: Real,
     /// Wall time of one evaluation of every pair's signed gap, measured alone (s).
     pub gaps_eval_s: Real,
