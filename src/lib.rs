@@ -75,3 +75,4 @@ pub mod settings;
 pub mod sim;
 pub mod state;
 pub mod sweep;
+pub mod workprec;

@@ -4,6 +4,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod bench;
 mod check;
 mod impact;
 mod inspect;
@@ -34,6 +35,8 @@ enum Command {
     Sweep(sweep::Args),
     /// Draw maps (SVG) of the collision type and the sign of ΔE over the (α, μ) plane, for each law.
     Regions(regions::Args),
+    /// Measure work-precision (error against wall time) of the methods, and the chain scaling; write CSV and SVG charts.
+    Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -45,6 +48,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => inspect::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Regions(args) => regions::run(args),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(code) => code,

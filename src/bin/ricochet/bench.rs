@@ -1,0 +1,571 @@
+//! `ricochet bench`: the work-precision charts (error against wall time, one curve per
+//! method, one chart per scene and error kind) and the scaling of the event-driven loop
+//! with the number of links of a chain, measured in one process; CSV, SVG and a
+//! description of the machine go to `--out` (default `docs/charts`).
+//!
+//! A subcommand rather than a criterion bench: it must run several methods on the same
+//! scenes with their accuracy, write tables and charts, and take options; criterion
+//! measures one closure at a time and owns the command line. rapier2d is compiled only
+//! with `--features rapier`; without it the bench runs ricochet's methods and says so.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use ricochet::math::Real;
+use ricochet::scene::Scene;
+use ricochet::workprec::chart::{self, Labels, Series};
+use ricochet::workprec::metrics::{Errors, errors};
+use ricochet::workprec::reference::{self, Ball, TIGHT_RTOL};
+use ricochet::workprec::sweep::{self, Method};
+use ricochet::workprec::table::{self, ChainRow, Row};
+use ricochet::workprec::{Trace, chain};
+
+/// Options of `ricochet bench`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of the CSV tables, the SVG charts and MACHINE.txt.
+    #[arg(short, long, default_value = "docs/charts")]
+    out: PathBuf,
+    /// Timed runs per setting (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+    /// Scenes of the work-precision part (comma-separated; default: all four).
+    #[arg(long, value_delimiter = ',')]
+    scenes: Option<Vec<String>>,
+    /// Skip the work-precision part.
+    #[arg(long)]
+    no_workprec: bool,
+    /// Skip the chain scaling part.
+    #[arg(long)]
+    no_chain: bool,
+    /// Largest chain (links; the chains are 1, 2, 4, ... up to it).
+    #[arg(long, default_value_t = 16)]
+    max_links: usize,
+    /// Simulated time of each chain run (s): the free fall before any contact.
+    #[arg(long, default_value_t = 0.05)]
+    chain_t_end: Real,
+}
+
+/// A scene of the work-precision part: its file, end time, the impacts compared, and how
+/// its reference is made.
+struct Case {
+    name: &'static str,
+    t_end: Real,
+    impacts: usize,
+}
+
+const CASES: [Case; 4] = [
+    // Before the accumulation point (4.06 s): 7 impacts.
+    Case {
+        name: "bouncing_ball",
+        t_end: 3.0,
+        impacts: 5,
+    },
+    // The lower end strikes, then the other; to before the accumulation.
+    Case {
+        name: "falling_rod",
+        t_end: 0.8,
+        impacts: 3,
+    },
+    // From the paper's impact at t = 0 through the bounces of the tip.
+    Case {
+        name: "kane_double_pendulum",
+        t_end: 0.5,
+        impacts: 3,
+    },
+    Case {
+        name: "pendulum_wall",
+        t_end: 5.0,
+        impacts: 5,
+    },
+];
+
+const KINDS: [(&str, &str); 4] = [
+    (
+        "impact_time",
+        "impact-time error, max over the first n impacts (s)",
+    ),
+    ("velocity", "post-impact velocity error, max relative"),
+    (
+        "energy",
+        "energy error after n impacts, relative to the loss",
+    ),
+    ("end_state", "end-state error |y − y_ref|/|y_ref|"),
+];
+
+fn kind_value(e: &Row, kind: &str) -> Real {
+    match kind {
+        "impact_time" => e.err_impact_time,
+        "velocity" => e.err_velocity,
+        "energy" => e.err_energy,
+        _ => e.err_end_state,
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if args.repeats == 0 {
+        bail!("--repeats must be at least 1");
+    }
+    if !(args.chain_t_end.is_finite() && args.chain_t_end > 0.0) {
+        bail!("--chain-t-end must be a positive number of seconds");
+    }
+    if args.max_links == 0 {
+        bail!("--max-links must be at least 1");
+    }
+    let scenes_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let cases: Vec<&Case> = match &args.scenes {
+        None => CASES.iter().collect(),
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                CASES.iter().find(|c| c.name == n).with_context(|| {
+                    format!(
+                        "unknown scene {n:?}; the work-precision scenes are {}",
+                        CASES.map(|c| c.name).join(", ")
+                    )
+                })
+            })
+            .collect::<anyhow::Result<_>>()?,
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut notes = String::new();
+    if !cfg!(feature = "rapier") {
+        println!(
+            "rapier2d is not compiled in (build with --features rapier): ricochet's methods only"
+        );
+    }
+    if !args.no_workprec {
+        let mut rows = Vec::new();
+        for case in &cases {
+            rows.extend(workprec(
+                &scenes_dir,
+                case,
+                args.repeats,
+                &args.out,
+                &mut notes,
+            )?);
+        }
+        let path = args.out.join("workprec.csv");
+        table::write(&path, &rows)?;
+        println!("wrote {}", path.display());
+    }
+    if !args.no_chain {
+        chain_scaling(&scenes_dir, &args, &mut notes)?;
+    }
+    machine(&args.out, &notes)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The work-precision part on one scene.
+fn workprec(
+    dir: &Path,
+    case: &Case,
+    repeats: usize,
+    out: &Path,
+    notes: &mut String,
+) -> anyhow::Result<Vec<Row>> {
+    let mut scene = ricochet::scene::load(dir.join(format!("{}.toml", case.name)))?;
+    scene.settings.t_end = case.t_end;
+    let (reference, ref_name) = reference_of(&scene, notes)?;
+    println!(
+        "\n{} to {} s, {} impacts compared, reference {ref_name}: impacts at {}",
+        case.name,
+        case.t_end,
+        case.impacts,
+        reference
+            .impacts
+            .iter()
+            .map(|i| format!("{:.6}", i.t))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if reference.impacts.len() < case.impacts {
+        bail!(
+            "{}: the reference has {} impacts, fewer than the {} compared",
+            case.name,
+            reference.impacts.len(),
+            case.impacts
+        );
+    }
+    let mut rows = Vec::new();
+    for method in Method::ALL {
+        for setting in method.default_sweep() {
+            let Some(row) = measure(
+                &scene, case, method, setting, repeats, &reference, &ref_name,
+            )?
+            else {
+                continue;
+            };
+            println!(
+                "  {:<12} {}={:<8.0e} wall {:>10.3e} s  steps {:>8}  rhs {:>8}  impacts {:>3}  \
+                 err t {:.2e}  v {:.2e}  E {:.2e}  end {:.2e}  {}",
+                row.method,
+                row.parameter,
+                row.value,
+                row.wall_median_s,
+                row.steps,
+                row.rhs_evals.map_or("-".into(), |r| r.to_string()),
+                row.impacts,
+                row.err_impact_time,
+                row.err_velocity,
+                row.err_energy,
+                row.err_end_state,
+                row.stop
+            );
+            rows.push(row);
+        }
+    }
+    for (kind, label) in KINDS {
+        let series: Vec<Series> = Method::ALL
+            .iter()
+            .filter_map(|m| {
+                let points: Vec<(Real, Real)> = (rows.iter())
+                    .filter(|r| r.method == m.name())
+                    .map(|r| (r.wall_median_s, kind_value(r, kind)))
+                    .collect();
+                (!points.is_empty()).then(|| Series {
+                    name: m.name().to_owned(),
+                    points,
+                })
+            })
+            .collect();
+        let path = out.join(format!("{}_{kind}.svg", case.name));
+        let title = format!("{} ({}; × off scale)", case.name, ref_name);
+        chart::loglog(
+            &path,
+            Labels {
+                title: &title,
+                x: "wall time (s), median",
+                y: label,
+            },
+            &series,
+        )?;
+    }
+    for other in [Method::MoreauJean, Method::Rapier, Method::Rk4] {
+        if let Some(line) = equal_wall_ratio(&rows, other, "velocity") {
+            println!("  {}: {line}", case.name);
+            let _ = writeln!(notes, "{}: {line}", case.name);
+        }
+    }
+    if case.name == "kane_double_pendulum" {
+        let mut s = scene.clone();
+        s.settings.t_end = 2.0;
+        let (wall, lo, hi) = sweep::time_ricochet(&s, Method::Dopri5, 1e-10, repeats.max(5))?;
+        let line = format!(
+            "kane_double_pendulum to 2 s at rtol 1e-10 (atol 1e-12), no log: wall {wall:.3e} s \
+             (runs {lo:.3e}–{hi:.3e}), {:.3e} simulated s per wall s (target ≥ 1e4)",
+            2.0 / wall
+        );
+        println!("  {line}");
+        let _ = writeln!(notes, "{line}");
+    }
+    Ok(rows)
+}
+
+/// The reference of a scene and its name.
+fn reference_of(scene: &Scene, notes: &mut String) -> anyhow::Result<(Trace, String)> {
+    let material = scene.model.pairs()[0].material;
+    if scene.name == "bouncing_ball" {
+        let radius = scene.model.colliders()[0]
+            .shape
+            .as_ball()
+            .context("bouncing_ball: the ball's shape")?
+            .radius;
+        let ball = Ball {
+            g: -scene.model.gravity().y,
+            y0: scene.initial.q[0],
+            r: radius,
+            m: scene.model.bodies()[0].mass,
+            e: material.e,
+        };
+        return Ok((ball.closed_form(scene.settings.t_end), "closed form".into()));
+    }
+    let tight = reference::tight(scene)?;
+    if scene.name == "falling_rod" {
+        // The tight run against the analytic first impact (the scene's constants).
+        let first = reference::falling_rod_first_impact(
+            1.0,
+            1.0,
+            0.01,
+            30f64.to_radians(),
+            1.0,
+            9.81,
+            material.e,
+            material.mu,
+        )?;
+        let got = tight.impacts.first().context("falling_rod: no impact")?;
+        let line = format!(
+            "falling_rod: the reference's first impact against the analytic one: |Δt| = {:.1e} s, \
+             |Δv_n^S| = {:.1e} m/s, ||Δv_t^S|| = {:.1e} m/s, |ΔE| = {:.1e} J",
+            (got.t - first.t).abs(),
+            (got.v_s[0] - first.v_s[0]).abs(),
+            (got.v_s[1].abs() - first.v_s[1].abs()).abs(),
+            (got.energy_after - first.energy_after).abs()
+        );
+        println!("{line}");
+        let _ = writeln!(notes, "{line}");
+    }
+    Ok((tight, format!("dopri5 rtol {TIGHT_RTOL:.0e}")))
+}
+
+/// One method at one setting: the errors from one observed run, the wall time from
+/// `repeats` runs without observer. `None` if the method is not available (rapier
+/// without the feature) or cannot run the scene (said on the terminal).
+fn measure(
+    scene: &Scene,
+    case: &Case,
+    method: Method,
+    setting: Real,
+    repeats: usize,
+    reference: &Trace,
+    ref_name: &str,
+) -> anyhow::Result<Option<Row>> {
+    let (trace, steps, rhs, stop, walls) = match method {
+        Method::Rapier => match rapier_run(scene, setting, repeats)? {
+            Some(r) => r,
+            None => return Ok(None),
+        },
+        _ => {
+            let (trace, c, stop) = sweep::trace_of(scene, method, setting)?;
+            let walls = sweep::time_ricochet(scene, method, setting, repeats)?;
+            (
+                trace,
+                c.steps,
+                Some(c.rhs_evals),
+                stop.name().to_owned(),
+                walls,
+            )
+        }
+    };
+    let Errors {
+        impact_time,
+        velocity,
+        energy,
+        end_state,
+    } = errors(&trace, reference, case.impacts);
+    Ok(Some(Row {
+        scene: case.name.into(),
+        method: method.name().into(),
+        parameter: method.parameter().into(),
+        value: setting,
+        wall_median_s: walls.0,
+        wall_min_s: walls.1,
+        wall_max_s: walls.2,
+        repeats: repeats as u32,
+        steps,
+        rhs_evals: rhs,
+        impacts: trace.impacts.len() as u64,
+        compared: case.impacts as u32,
+        stop,
+        reference: ref_name.into(),
+        err_impact_time: impact_time,
+        err_velocity: velocity,
+        err_energy: energy,
+        err_end_state: end_state,
+    }))
+}
+
+type Measured = (Trace, u64, Option<u64>, String, (Real, Real, Real));
+
+#[cfg(feature = "rapier")]
+fn rapier_run(scene: &Scene, dt: Real, repeats: usize) -> anyhow::Result<Option<Measured>> {
+    use ricochet::workprec::rapier::RapierWorld;
+    let t_end = scene.settings.t_end;
+    let mut world = match RapierWorld::new(scene, dt) {
+        Ok(w) => w,
+        Err(e) => {
+            println!("  rapier: {e}");
+            return Ok(None);
+        }
+    };
+    let trace = world.trace(t_end)?;
+    let steps = (t_end / dt).round() as u64;
+    let walls = sweep::wall_times(repeats, || {
+        if let Ok(mut w) = RapierWorld::new(scene, dt) {
+            for _ in 0..steps {
+                w.step();
+            }
+            std::hint::black_box(w.t());
+        }
+    });
+    Ok(Some((trace, steps, None, "t_end".into(), walls)))
+}
+
+#[cfg(not(feature = "rapier"))]
+fn rapier_run(_: &Scene, _: Real, _: usize) -> anyhow::Result<Option<Measured>> {
+    Ok(None)
+}
+
+/// At equal wall time, `other`'s error over DOPRI5's, for every setting of `other` whose
+/// wall time DOPRI5 can match: DOPRI5's error at that wall time is interpolated on its
+/// log–log curve (or, beyond its slowest setting, its most accurate one). Returns a line
+/// with the smallest and the largest ratio.
+fn equal_wall_ratio(rows: &[Row], other: Method, kind: &str) -> Option<String> {
+    let mut dopri: Vec<(Real, Real)> = (rows.iter())
+        .filter(|r| r.method == "dopri5")
+        .map(|r| (r.wall_median_s, kind_value(r, kind)))
+        .filter(|p| p.1.is_finite() && p.1 > 0.0)
+        .collect();
+    dopri.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (first, last) = (dopri.first()?.0, dopri.last()?.0);
+    let ratios: Vec<(Real, Real)> = (rows.iter())
+        .filter(|r| r.method == other.name() && r.wall_median_s >= first)
+        .map(|r| {
+            let w = r.wall_median_s;
+            let e = if w >= last {
+                dopri.iter().map(|p| p.1).fold(Real::INFINITY, Real::min)
+            } else {
+                let k = dopri.iter().position(|p| p.0 > w).unwrap_or(1).max(1);
+                let (a, b) = (dopri[k - 1], dopri[k]);
+                let s = (w.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
+                (a.1.ln() + s * (b.1.ln() - a.1.ln())).exp()
+            };
+            (r.value, kind_value(r, kind) / e)
+        })
+        .collect();
+    if ratios.is_empty() {
+        return Some(format!(
+            "{} is faster than DOPRI5's fastest setting at every step: no equal-wall comparison",
+            other.name()
+        ));
+    }
+    let min = ratios
+        .iter()
+        .fold(ratios[0], |m, p| if p.1 < m.1 { *p } else { m });
+    let max = ratios
+        .iter()
+        .fold(ratios[0], |m, p| if p.1 > m.1 { *p } else { m });
+    Some(format!(
+        "{kind} error of {} / DOPRI5's at equal wall time: from {:.2e} (dt {:.0e}) to {:.2e} \
+         (dt {:.0e}) over {} settings",
+        other.name(),
+        min.1,
+        min.0,
+        max.1,
+        max.0,
+        ratios.len()
+    ))
+}
+
+/// The chain scaling part.
+fn chain_scaling(dir: &Path, args: &Args, notes: &mut String) -> anyhow::Result<()> {
+    let path = dir.join("chain.toml");
+    let mut rows: Vec<ChainRow> = Vec::new();
+    let mut links = 1;
+    println!(
+        "\nchain, DOPRI5 at the scene's tolerances, to {} s:",
+        args.chain_t_end
+    );
+    while links <= args.max_links {
+        let repeats = if links >= 16 { 3 } else { args.repeats };
+        let r = chain::measure(&path, links, args.chain_t_end, repeats)?;
+        println!(
+            "  {:>2} links, {:>3} pairs: {:.3e} wall s per simulated s ({}), {} steps \
+             ({} rejected), {} rhs, {} events, {} impacts; rhs {:.2e} s each = {:.0} % of \
+             the run; all gaps {:.2e} s",
+            r.links,
+            r.pairs,
+            r.wall_per_sim_s,
+            r.stop,
+            r.steps,
+            r.rejected,
+            r.rhs_evals,
+            r.events,
+            r.impacts,
+            r.rhs_eval_s,
+            100.0 * r.rhs_share,
+            r.gaps_eval_s
+        );
+        rows.push(r);
+        links *= 2;
+    }
+    let points: Vec<(Real, Real)> = rows
+        .iter()
+        .map(|r| (Real::from(r.links), r.wall_per_sim_s))
+        .collect();
+    let p_all = chain::power_law_exponent(&points);
+    let p_big = chain::power_law_exponent(&points[points.len().saturating_sub(3)..]);
+    let line = format!(
+        "chain: wall time per simulated second ∝ links^{p_all:.2} over all, \
+         ^{p_big:.2} over the three largest"
+    );
+    println!("  {line}");
+    let _ = writeln!(notes, "{line}");
+    let csv = args.out.join("chain.csv");
+    table::write(&csv, &rows)?;
+    let series = [
+        Series {
+            name: "wall s per simulated s".into(),
+            points,
+        },
+        Series {
+            name: "rhs evaluations × rhs time, per simulated s".into(),
+            points: rows
+                .iter()
+                .map(|r| {
+                    (
+                        Real::from(r.links),
+                        r.rhs_evals as Real * r.rhs_eval_s / r.t_end,
+                    )
+                })
+                .collect(),
+        },
+    ];
+    chart::loglog(
+        &args.out.join("chain_scaling.svg"),
+        Labels {
+            title: &format!("chain: event-driven DOPRI5 (slope {p_all:.2})"),
+            x: "links",
+            y: "wall time per simulated second",
+        },
+        &series,
+    )?;
+    println!("wrote {} and chain_scaling.svg", csv.display());
+    Ok(())
+}
+
+/// `MACHINE.txt`: the CPU, cores, load, date, rustc, commit, and the figures printed.
+fn machine(out: &Path, notes: &str) -> anyhow::Result<()> {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown".into());
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    let cmd = |c: &str, a: &[&str]| {
+        std::process::Command::new(c)
+            .args(a)
+            .output()
+            .ok()
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
+            .unwrap_or_else(|| "unknown".into())
+    };
+    let text = format!(
+        "cpu: {cpu}\ncores: {cores}\nload average (1, 5, 15 min) at the end: {}\ndate: {}\n\
+         rustc: {}\ncommit: {}\nfeatures: {}\n\n{notes}",
+        load.split_whitespace()
+            .take(3)
+            .collect::<Vec<_>>()
+            .join(" "),
+        cmd("date", &["-u", "+%Y-%m-%dT%H:%M:%SZ"]),
+        cmd("rustc", &["--version"]),
+        cmd("git", &["rev-parse", "--short", "HEAD"]),
+        if cfg!(feature = "rapier") {
+            "rapier"
+        } else {
+            "(none)"
+        },
+    );
+    let path = out.join("MACHINE.txt");
+    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
