@@ -431,7 +431,11 @@ fn classify<St: Stepper, G: EventFunctions>(
     }
     let (gda, gdb) = (smp.gds[j * m + i], smp.gds[(j + 1) * m + i]);
     if ga > 0.0 && gb > 0.0 && gda < 0.0 && gdb > 0.0 {
-        // A minimum between two positive samples: does it dip to g ≤ 0?
+        // A minimum between two positive samples: does it dip to g ≤ 0? Not if it
+        // clearly cannot (most pairs of a many-body scene, far apart, at every step).
+        if cannot_dip(ga, gda, gb, gdb, b - a) {
+            return Ok(None);
+        }
         let found = extremum(sp, settings, i, (a, -gda), (b, -gdb), Extremum::Min)?;
         if let Found::Crossed(t, g_t) = found {
             let (lo, hi) = root(sp, settings, i, (a, ga), (t, g_t))?;
@@ -453,6 +457,23 @@ fn classify<St: Stepper, G: EventFunctions>(
         }
     }
     Ok(None)
+}
+
+/// Whether a function that is positive at both ends of `[a, a + h]` (`g_a`, `g_b`),
+/// falling at `a` (`ġ_a < 0`) and rising at `a + h` (`ġ_b > 0`), clearly stays positive
+/// in between, so that the extremum search can be skipped.
+///
+/// For `g` convex on the interval (`ġ` increasing from `ġ_a` to `ġ_b`, one minimum), the
+/// tangents at the ends are lower bounds: `g(t) ≥ g_a + ġ_a (t − a) ≥ g_a + ġ_a h` and
+/// `g(t) ≥ g_b − ġ_b h`. The test asks the larger of the two bounds to stay positive with
+/// the end slopes doubled, `max(g_a + 2 ġ_a h, g_b − 2 ġ_b h) > 0`: a margin for a
+/// non-convex `g` whose slope steepens inside the interval to up to twice its values at
+/// the ends. (The search itself assumes one extremum between two samples, the resolution
+/// of the sampling.) Without it, every pair of a many-body scene with a minimum of its
+/// gap inside a sample interval, however far apart, was searched to the time tolerance
+/// at every step: a cost of ~N⁴ per step for N bodies.
+fn cannot_dip(g_a: Real, gd_a: Real, g_b: Real, gd_b: Real, h: Real) -> bool {
+    (g_a + 2.0 * gd_a * h).max(g_b - 2.0 * gd_b * h) > 0.0
 }
 
 /// The root of `gᵢ` in `[lo, hi]`, `gᵢ(lo) > 0 ≥ gᵢ(hi)`, as a bracket to the time
@@ -550,4 +571,36 @@ fn extremum<St: Stepper, G: EventFunctions>(
             Found::Extremum(lo, hi)
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cannot_dip;
+
+    /// A convex parabola `g = c + k (t − s)²` whose minimum `c` lies inside `[0, h]`: the
+    /// search is skipped only if `c > 0` (never when it dips to zero or below), and it
+    /// is skipped when the minimum is far from zero.
+    #[test]
+    fn a_convex_dip_is_never_skipped() {
+        let h = 1e-3;
+        for ks in 1..=40 {
+            let k = 10f64.powf(ks as f64 / 4.0 - 3.0);
+            for ss in 1..20 {
+                let s = h * ss as f64 / 20.0;
+                for cs in -30..=30 {
+                    let c = k * h * h * cs as f64 / 10.0;
+                    let (g, gd) = (|t: f64| c + k * (t - s).powi(2), |t: f64| 2.0 * k * (t - s));
+                    let (ga, gb, gda, gdb) = (g(0.0), g(h), gd(0.0), gd(h));
+                    if ga <= 0.0 || gb <= 0.0 {
+                        continue;
+                    }
+                    let skip = cannot_dip(ga, gda, gb, gdb, h);
+                    assert!(!skip || c > 0.0, "k {k}, s {s}, c {c}: a dip skipped");
+                    if c > 4.0 * k * h * h {
+                        assert!(skip, "k {k}, s {s}, c {c}: a far minimum searched");
+                    }
+                }
+            }
+        }
+    }
 }

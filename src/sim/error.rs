@@ -56,7 +56,16 @@ impl std::fmt::Display for StopReason {
                 write!(f, "accumulation of impacts on {name}: {reason}")
             }
             StopReason::Interrupted { .. } => f.write_str("interrupted"),
-            StopReason::Failed(e) => write!(f, "failed: {e}"),
+            StopReason::Failed(e) => {
+                // The whole chain: what failed, and why.
+                write!(f, "failed: {e}")?;
+                let mut cause = std::error::Error::source(e);
+                while let Some(c) = cause {
+                    write!(f, ": {c}")?;
+                    cause = c.source();
+                }
+                Ok(())
+            }
         }
     }
 }
