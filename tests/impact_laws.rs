@@ -766,3 +766,27 @@ fn one_degree_of_freedom_pendulum_impact() {
         );
     }
 }
+
+/// A singular `W` with `μ = m_nn/m_nt` (here `W = [[¼, ½], [½, 1]]`, `μ = ½`) has
+/// `g = μ m_tt − m_nt = 0` and `h = m_nn − μ m_nt = 0`: on Routh's path neither forward
+/// sliding (`dv_n/dI_n = h`) nor sticking (`Δ/m_tt`) raises `v_n`, so every law jams,
+/// with or without tangential approach. (Newton's law divided by `h = 0` in Eq. (52) and
+/// reported an incoherent `I_n = ∞`; found by the `ricochet regions` map over the row
+/// `μ = m_nn/m_nt`.)
+#[test]
+fn singular_w_with_g_and_h_zero_jams_under_every_law() {
+    let w = ImpactMatrix::new(0.25, 0.5, 1.0);
+    assert_eq!(w.det(), 0.0);
+    for v_t in [0.0, 0.3] {
+        for law in [Law::Newton, Law::KaneLevinson, Law::Poisson, Law::Stronge] {
+            let (mu, v_a) = (0.5, ContactVelocity::new(-1.0, v_t));
+            // g and h of Eq. (35).
+            assert_eq!((mu * w.tt - w.nt, w.nn - mu * w.nt), (0.0, 0.0));
+            let pb = ImpactProblem::new(w, v_a, 0.5, mu);
+            match impact::solve(law, &pb) {
+                Err(ImpactError::Jam { .. }) => {}
+                other => panic!("{law:?}, v_t = {v_t}: expected a jam, got {other:?}"),
+            }
+        }
+    }
+}

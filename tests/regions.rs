@@ -407,18 +407,24 @@ fn bad_maps_are_typed_errors() {
     ));
     // A singular W (one degree of freedom) is accepted: the laws jam where friction holds
     // the approaching contact, and those cells say so.
-    // (The nodes avoid μ = 0.5, where g = h = 0 and Newton's law reports `Incoherent`
-    // (I_n = inf) rather than the jam Poisson's reports: an edge case of `impact::newton`
-    // with singular W, left to its owner.)
+    // The row μ = m_nn/m_nt = 0.5 is on the grid: for α ≥ 0 (g = h = 0 there) every node
+    // of it jams (`tests/impact_laws.rs::singular_w_with_g_and_h_zero_jams_under_every_law`);
+    // for α < 0 the mirrored W has g, h > 0.
     let singular = ImpactMatrix::new(0.25, 0.5, 1.0);
     let m = map(
         Law::Newton,
         singular,
         0.5,
         Axis::new(-3.0, 3.0, 61),
-        Axis::new(0.0, 2.0, 40),
+        Axis::new(0.0, 2.0, 41),
     );
     assert!(m.nodes().any(|(_, _, c)| c == Cell::Jam));
+    let row: Vec<Cell> = (m.nodes())
+        .filter(|(alpha, mu, _)| *mu == 0.5 && *alpha >= 0.0)
+        .map(|(_, _, c)| c)
+        .collect();
+    assert_eq!(row.len(), 31);
+    assert!(row.iter().all(|&c| c == Cell::Jam), "{row:?}");
     assert!(m.nodes().any(|(_, _, c)| c.kind().is_some()));
 }
 

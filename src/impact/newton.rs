@@ -86,6 +86,14 @@ pub fn solve(pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolutio
             ),
             c.p * ((1.0 + e) * c.g * big_v - c.h * vt) / (c.q * c.g),
         ),
+        // DEVIATION from Eq. (52), which needs h > 0: h = 0 on the forward-sliding side
+        // means g = h = 0 as well (Case 1 with g q + h p = 2μΔ, hence Δ = 0): the
+        // boundary α = (1+e) r_m is 0/0, and neither forward sliding (dv_n/dI_n = h = 0)
+        // nor sticking after G (dv_n/dI_n = Δ/m_tt = 0) raises v_n: the contact jams, as
+        // it does on Routh's path under the other laws.
+        CollisionType::ForwardSliding if c.h <= 0.0 => {
+            return LawSolution::failed(Failure::Jam);
+        }
         CollisionType::ForwardSliding => {
             let i_n = (1.0 + e) * big_v / c.h;
             (
