@@ -18,9 +18,9 @@
 //!   100 Hz (dense output, energies, gaps, body poses), without encoding;
 //! - `mcap log 100 Hz`: the [`RunLogger`] writing `/state`, `/tf`, `/impacts`, `/scene`,
 //!   `/log` and the metadata as JSON in LZ4 chunks to an in-memory `Cursor<Vec<u8>>`
-//!   (what `ricochet run` does, minus the disk). The JSON is encoded on the simulation's
-//!   thread, the chunks are compressed and written on the log's own thread: on a machine
-//!   with a second core free the two overlap.
+//!   (what `ricochet run` does, minus the disk). The simulation's thread copies each
+//!   sample into a batch; the log's own thread encodes the JSON, compresses the chunks
+//!   and writes them: on a machine with a second core free the two overlap.
 //!
 //! Criterion's throughput is set to the simulated time, so its `thrpt` line reads
 //! *simulated seconds per wall second*. The work counters (steps, right-hand-side

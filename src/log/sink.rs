@@ -1,9 +1,13 @@
 //! [`Sink`]: the MCAP writer on a thread of its own, so that compressing the chunks and
 //! writing them out overlaps with the simulation.
 //!
-//! The simulation thread encodes each message as JSON (where a bad number is caught and
-//! reported at once) into a [`Batch`]; a full batch goes to the sink thread, which writes
-//! its messages to the `mcap::Writer` (that compresses a chunk when it is full). Batches
+//! The simulation thread checks each message (a bad number is reported at once, naming
+//! the field) and puts it in a [`Batch`]: the frequent `/state` and `/tf` samples as
+//! copies of their records, into slots that keep their allocations from one batch to the
+//! next; the rare messages as JSON. A full batch goes to the sink thread, which encodes
+//! the samples as JSON and writes every message to the `mcap::Writer` (that compresses a
+//! chunk when it is full). The simulation thread thus pays a copy per sample, and the
+//! JSON encoding, the compression and the I/O overlap with the simulation. Batches
 //! and metadata go through one bounded channel, in order, so the file's bytes are those a
 //! writer on the calling thread would produce: two runs of the same scene still give
 //! byte-identical logs. Sending messages in batches keeps the cost of the channel (a
@@ -28,6 +32,9 @@ use mcap::McapError;
 use mcap::records::{MessageHeader, Metadata};
 
 use super::LogError;
+use super::foxglove::FrameTransforms;
+use super::records::StateRecord;
+use super::schemas::Topic;
 
 /// Batches that may wait in the channel for the sink thread. A full channel makes the
 /// simulation wait (back-pressure) rather than grow without bound.
@@ -39,24 +46,103 @@ const BATCH_MESSAGES: usize = 64;
 /// …or this many bytes.
 const BATCH_BYTES: usize = 64 * 1024;
 
-/// Messages encoded one after the other in one buffer.
+/// What a message of a batch holds.
+enum Payload {
+    /// JSON bytes, `bytes[start..end]` of the batch.
+    Bytes { start: usize, end: usize },
+    /// The record in slot `k` of the batch's `/state` samples, encoded on the sink thread.
+    State(usize),
+    /// The record in slot `k` of the batch's `/tf` samples, encoded on the sink thread.
+    Transforms(usize),
+}
+
+/// Messages in order, with the records and bytes they refer to. Its vectors and the
+/// records in its slots keep their allocations when the batch is cleared and reused.
 #[derive(Default)]
 pub(super) struct Batch {
-    /// Each message's header and the end of its bytes in `bytes` (it starts where the
-    /// previous one ends).
-    messages: Vec<(MessageHeader, usize)>,
-    /// The messages' JSON bytes, back to back.
+    messages: Vec<(MessageHeader, Payload)>,
+    /// JSON bytes of the messages encoded on the calling thread, back to back.
     bytes: Vec<u8>,
+    /// `/state` records; the first `n_states` are in use.
+    states: Vec<StateRecord>,
+    n_states: usize,
+    /// `/tf` records; the first `n_transforms` are in use.
+    transforms: Vec<FrameTransforms>,
+    n_transforms: usize,
 }
 
 impl Batch {
     fn clear(&mut self) {
         self.messages.clear();
         self.bytes.clear();
+        self.n_states = 0;
+        self.n_transforms = 0;
     }
 
     fn is_full(&self) -> bool {
         self.messages.len() >= BATCH_MESSAGES || self.bytes.len() >= BATCH_BYTES
+    }
+
+    /// A copy of `state` in the next free slot; its index.
+    fn add_state(&mut self, state: &StateRecord) -> usize {
+        let k = self.n_states;
+        match self.states.get_mut(k) {
+            Some(slot) => copy_state(slot, state),
+            None => self.states.push(state.clone()),
+        }
+        self.n_states += 1;
+        k
+    }
+
+    /// A copy of `tf` in the next free slot; its index.
+    fn add_transforms(&mut self, tf: &FrameTransforms) -> usize {
+        let k = self.n_transforms;
+        match self.transforms.get_mut(k) {
+            Some(slot) => copy_transforms(slot, tf),
+            None => self.transforms.push(tf.clone()),
+        }
+        self.n_transforms += 1;
+        k
+    }
+}
+
+/// `*dst = src.clone()`, reusing `dst`'s allocations.
+fn copy_state(dst: &mut StateRecord, src: &StateRecord) {
+    dst.t = src.t;
+    dst.q.clone_from(&src.q);
+    dst.u.clone_from(&src.u);
+    dst.energy = src.energy;
+    dst.mode = src.mode;
+    dst.mode_code = src.mode_code;
+    dst.impact_count = src.impact_count;
+    dst.contacts.truncate(src.contacts.len());
+    for (k, c) in src.contacts.iter().enumerate() {
+        match dst.contacts.get_mut(k) {
+            Some(d) => {
+                d.pair.clone_from(&c.pair);
+                d.mode = c.mode;
+                d.mode_code = c.mode_code;
+                d.gap = c.gap;
+            }
+            None => dst.contacts.push(c.clone()),
+        }
+    }
+}
+
+/// `*dst = src.clone()`, reusing `dst`'s allocations.
+fn copy_transforms(dst: &mut FrameTransforms, src: &FrameTransforms) {
+    dst.transforms.truncate(src.transforms.len());
+    for (k, f) in src.transforms.iter().enumerate() {
+        match dst.transforms.get_mut(k) {
+            Some(d) => {
+                d.timestamp = f.timestamp;
+                d.parent_frame_id.clone_from(&f.parent_frame_id);
+                d.child_frame_id.clone_from(&f.child_frame_id);
+                d.translation = f.translation;
+                d.rotation = f.rotation;
+            }
+            None => dst.transforms.push(f.clone()),
+        }
     }
 }
 
@@ -77,11 +163,11 @@ enum Command {
 struct Failure {
     /// Set once `error` holds an error (cheap to test at every message).
     failed: AtomicBool,
-    error: Mutex<Option<McapError>>,
+    error: Mutex<Option<LogError>>,
 }
 
 impl Failure {
-    fn set(&self, error: McapError) {
+    fn set(&self, error: LogError) {
         if let Ok(mut slot) = self.error.lock() {
             slot.get_or_insert(error);
         }
@@ -94,7 +180,7 @@ impl Failure {
             return Ok(());
         }
         match self.error.lock().ok().and_then(|mut slot| slot.take()) {
-            Some(error) => Err(error.into()),
+            Some(error) => Err(error),
             None => Err(LogError::SinkFailed),
         }
     }
@@ -145,7 +231,38 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             self.open.bytes.truncate(start);
             return Err(e);
         }
-        self.open.messages.push((header, self.open.bytes.len()));
+        let end = self.open.bytes.len();
+        self.open
+            .messages
+            .push((header, Payload::Bytes { start, end }));
+        self.send_if_full()
+    }
+
+    /// Adds a `/state` sample (copied; encoded on the sink thread) with `header`.
+    pub(super) fn push_state(
+        &mut self,
+        header: MessageHeader,
+        state: &StateRecord,
+    ) -> Result<(), LogError> {
+        self.failure.take()?;
+        let k = self.open.add_state(state);
+        self.open.messages.push((header, Payload::State(k)));
+        self.send_if_full()
+    }
+
+    /// Adds a `/tf` sample (copied; encoded on the sink thread) with `header`.
+    pub(super) fn push_transforms(
+        &mut self,
+        header: MessageHeader,
+        tf: &FrameTransforms,
+    ) -> Result<(), LogError> {
+        self.failure.take()?;
+        let k = self.open.add_transforms(tf);
+        self.open.messages.push((header, Payload::Transforms(k)));
+        self.send_if_full()
+    }
+
+    fn send_if_full(&mut self) -> Result<(), LogError> {
         if self.open.is_full() {
             self.send_batch()?;
         }
@@ -224,19 +341,28 @@ fn serve<W: Write + Seek>(
     failure: &Failure,
 ) -> Option<Result<W, McapError>> {
     let mut broken = false;
+    // The JSON of the samples encoded here, reused.
+    let mut json = Vec::new();
     for command in inbox {
         match command {
             Command::Messages(batch) => {
-                let mut start = 0;
-                for (header, end) in &batch.messages {
+                for (header, payload) in &batch.messages {
                     if broken {
                         break;
                     }
-                    if let Err(e) = mcap.write_to_known_channel(header, &batch.bytes[start..*end]) {
+                    let encoded = match *payload {
+                        Payload::Bytes { start, end } => Ok(&batch.bytes[start..end]),
+                        Payload::State(k) => encode(&mut json, Topic::State, &batch.states[k]),
+                        Payload::Transforms(k) => {
+                            encode(&mut json, Topic::Tf, &batch.transforms[k])
+                        }
+                    };
+                    let written =
+                        encoded.and_then(|data| Ok(mcap.write_to_known_channel(header, data)?));
+                    if let Err(e) = written {
                         broken = true;
                         failure.set(e);
                     }
-                    start = *end;
                 }
                 // The batch goes back for reuse; if the pool is full, it is dropped.
                 let _ = recycle.try_send(batch);
@@ -244,7 +370,7 @@ fn serve<W: Write + Seek>(
             Command::Metadata(metadata) => {
                 if !broken && let Err(e) = mcap.write_metadata(&metadata) {
                     broken = true;
-                    failure.set(e);
+                    failure.set(e.into());
                 }
             }
             Command::Flush(answer) => {
@@ -262,4 +388,18 @@ fn serve<W: Write + Seek>(
         }
     }
     None
+}
+
+/// `message` as JSON in `json` (cleared first).
+fn encode<'j, M: serde::Serialize>(
+    json: &'j mut Vec<u8>,
+    topic: Topic,
+    message: &M,
+) -> Result<&'j [u8], LogError> {
+    json.clear();
+    serde_json::to_writer(&mut *json, message).map_err(|source| LogError::Encode {
+        what: topic.name(),
+        source,
+    })?;
+    Ok(json)
 }

@@ -164,7 +164,7 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         self.metadata(metadata::AUDIT, map)
     }
 
-    /// Writes one `/state` sample at its time `state.t`.
+    /// Writes one `/state` sample at its time `state.t` (encoded on the writer thread).
     pub fn state(&mut self, state: &StateRecord) -> Result<(), LogError> {
         if let Some(field) = state.first_non_finite() {
             return Err(LogError::NonFinite {
@@ -173,7 +173,10 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
                 field,
             });
         }
-        self.write(Topic::State, state.t, state)
+        let header = self.header(Topic::State, nanoseconds(state.t)?);
+        self.mcap.push_state(header, state)?;
+        self.advance(Topic::State);
+        Ok(())
     }
 
     /// Writes one entry of the impact ledger on `/impacts` at its time `impact.t`.
@@ -194,9 +197,21 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         self.write_checked(Topic::Scene, t, update)
     }
 
-    /// Writes frame transforms on `/tf` at simulated time `t` (s).
+    /// Writes frame transforms on `/tf` at simulated time `t` (s) (encoded on the writer
+    /// thread).
     pub fn transforms(&mut self, t: f64, transforms: &FrameTransforms) -> Result<(), LogError> {
-        self.write_checked(Topic::Tf, t, transforms)
+        let time = nanoseconds(t)?;
+        if let Some(field) = first_non_finite_transform(transforms) {
+            return Err(LogError::NonFinite {
+                what: Topic::Tf.name(),
+                t,
+                field,
+            });
+        }
+        let header = self.header(Topic::Tf, time);
+        self.mcap.push_transforms(header, transforms)?;
+        self.advance(Topic::Tf);
+        Ok(())
     }
 
     /// Writes a text message on `/log` at simulated time `t` (s), from `ricochet`.
@@ -271,16 +286,27 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
 
     /// Hands the message encoded from `start` on to the sink, on `topic` at `time` (ns).
     fn write_encoded(&mut self, topic: Topic, time: u64, start: usize) -> Result<(), LogError> {
+        let header = self.header(topic, time);
+        self.mcap.push(header, start)?;
+        self.advance(topic);
+        Ok(())
+    }
+
+    /// The header of the next message on `topic` at `time` (ns).
+    fn header(&self, topic: Topic, time: u64) -> MessageHeader {
         let i = topic.index();
-        let header = MessageHeader {
+        MessageHeader {
             channel_id: self.channels[i],
             sequence: self.sequences[i],
             log_time: time,
             publish_time: time,
-        };
-        self.mcap.push(header, start)?;
+        }
+    }
+
+    /// Counts a message written on `topic`.
+    fn advance(&mut self, topic: Topic) {
+        let i = topic.index();
         self.sequences[i] = self.sequences[i].wrapping_add(1);
-        Ok(())
     }
 
     fn metadata(&mut self, name: &str, map: BTreeMap<String, String>) -> Result<(), LogError> {
@@ -289,6 +315,25 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
             metadata: map,
         })
     }
+}
+
+/// The first non-finite number of `tf`, named as in its JSON (`transforms[1].rotation.w`).
+fn first_non_finite_transform(tf: &FrameTransforms) -> Option<String> {
+    tf.transforms.iter().enumerate().find_map(|(k, f)| {
+        let (p, r) = (f.translation, f.rotation);
+        [
+            ("translation.x", p.x),
+            ("translation.y", p.y),
+            ("translation.z", p.z),
+            ("rotation.x", r.x),
+            ("rotation.y", r.y),
+            ("rotation.z", r.z),
+            ("rotation.w", r.w),
+        ]
+        .into_iter()
+        .find(|(_, v)| !v.is_finite())
+        .map(|(name, _)| format!("transforms[{k}].{name}"))
+    })
 }
 
 /// Refuses a message with a NaN or an infinity (a `null` in its JSON), naming the field.
