@@ -71,6 +71,13 @@ pub struct Solutions {
 /// Relative tolerance of the residuals and sign conditions.
 const TOL: Real = 1e-9;
 
+/// The most contacts the event-driven loop hands to [`solve`]: `4⁶ = 4096` linear systems
+/// of size 12, some tens of milliseconds. Beyond it the enumeration's `4ⁿ` cost would stall
+/// a run (at 11 points, four million systems per call) where it cannot even be
+/// interrupted; the loop stops with a clear error instead (Moreau–Jean's Gauss–Seidel
+/// handles many contacts).
+pub const MAX_ENUMERATED: usize = 6;
+
 /// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
 /// `A` is `2n × 2n`, `b` has `2n` entries, `allowed` has `n`. Intended for a few contacts
 /// (it tries up to `4ⁿ` linear systems); returns every consistent combination.

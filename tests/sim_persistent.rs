@@ -395,3 +395,41 @@ fn mode_changes_reach_the_log_and_the_state_messages() {
         );
     }
 }
+
+/// The 16-link chain landing on the floor (to 1 s): the event-driven loop gets through its
+/// early impacts and contacts (which, before the fix of `lcp::linear`, failed at
+/// t = 0.8209 s with a mode system nalgebra's SVD solved badly), then meets a simultaneous
+/// impact of more points than its exact enumeration handles (`lcp::MAX_ENUMERATED`). It
+/// stops there at once with an error naming the time, the count and the way out, instead
+/// of enumerating 4ⁿ combinations (at 11 points the run stalled for minutes and could not
+/// be interrupted). Moreau–Jean runs the same scene to its end.
+#[test]
+fn a_chain_with_more_contacts_than_the_enumeration_handles_stops_with_a_clear_error() {
+    let path = format!("{}/scenes/chain.toml", env!("CARGO_MANIFEST_DIR"));
+    let mut scene = ricochet::scene::load_chain(&path, 16).unwrap();
+    scene.settings.t_end = 1.0;
+    let (rec, summary, _) = run(&scene, MaterialOverride::default());
+    let StopReason::Failed(e) = &summary.stop else {
+        panic!("expected a failure, got {}", summary.stop);
+    };
+    let text = summary.stop.to_string();
+    println!("{text}; {} impacts", rec.impacts.len());
+    assert!(text.contains("more than the exact"), "{e}");
+    assert!(text.contains("moreau-jean"), "{text}");
+    assert!(
+        summary.state.t > 0.82 && summary.state.t < 1.0,
+        "t = {}",
+        summary.state.t
+    );
+    assert!(rec.impacts.len() > 100);
+
+    let mut mj =
+        ricochet::sim::MoreauJean::new(&scene.model, &scene.settings, MaterialOverride::default())
+            .unwrap();
+    let summary = mj.run(&scene.initial, &mut ricochet::sim::NullObserver, None);
+    assert!(
+        matches!(summary.stop, StopReason::EndTime),
+        "{}",
+        summary.stop
+    );
+}

@@ -341,6 +341,17 @@ impl Persistent {
         candidates: &[Candidate],
         v_slip: Real,
     ) -> Result<Selection, SimError> {
+        if candidates.len() > lcp::MAX_ENUMERATED {
+            return Err(SimError::Contact {
+                t: state.0,
+                message: format!(
+                    "{} contact points closed at once: more than the exact mode selection \
+                     handles ({}); Moreau–Jean (--method moreau-jean) handles many contacts",
+                    candidates.len(),
+                    lcp::MAX_ENUMERATED
+                ),
+            });
+        }
         // Assemble with provisional modes (the rows do not depend on them).
         let closed: Vec<Closed> = candidates
             .iter()
