@@ -482,17 +482,6 @@ impl ImpactMap {
         u: &mut [Real],
     ) -> Result<Vec<ImpactEvent>, SimError> {
         let k = points.len();
-        if k > lcp::MAX_ENUMERATED {
-            return Err(SimError::Contact {
-                t,
-                message: format!(
-                    "a simultaneous impact of {k} contact points: more than the exact \
-                     enumeration of the generalized Newton law handles ({}); Moreau–Jean \
-                     (--method moreau-jean) handles many contacts",
-                    lcp::MAX_ENUMERATED
-                ),
-            });
-        }
         let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
         let rows: Vec<usize> = (0..2 * k)
             .filter(|&r| r % 2 == 0 || (points[r / 2].2.mu > 0.0 && set.v[r].abs() <= v_stop))
