@@ -390,6 +390,23 @@ fn serve<W: Write + Seek>(
     None
 }
 
+/// Appends `message` as JSON to `buffer`; on an error `buffer` is left as it was. The one
+/// encoding of every message of the log, on either thread.
+pub(super) fn append_json<M: serde::Serialize>(
+    buffer: &mut Vec<u8>,
+    topic: Topic,
+    message: &M,
+) -> Result<(), LogError> {
+    let start = buffer.len();
+    serde_json::to_writer(&mut *buffer, message).map_err(|source| {
+        buffer.truncate(start);
+        LogError::Encode {
+            what: topic.name(),
+            source,
+        }
+    })
+}
+
 /// `message` as JSON in `json` (cleared first).
 fn encode<'j, M: serde::Serialize>(
     json: &'j mut Vec<u8>,
@@ -397,9 +414,6 @@ fn encode<'j, M: serde::Serialize>(
     message: &M,
 ) -> Result<&'j [u8], LogError> {
     json.clear();
-    serde_json::to_writer(&mut *json, message).map_err(|source| LogError::Encode {
-        what: topic.name(),
-        source,
-    })?;
+    append_json(json, topic, message)?;
     Ok(json)
 }

@@ -13,7 +13,7 @@ use super::LogError;
 use super::foxglove::{FrameTransforms, Log, LogLevel, SceneUpdate, Time, nanoseconds};
 use super::records::{Audit, ImpactRecord, StateRecord};
 use super::schemas::{MESSAGE_ENCODING, SCHEMA_ENCODING, Topic, metadata};
-use super::sink::Sink;
+use super::sink::{Sink, append_json};
 
 /// Compression of the MCAP chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -274,13 +274,7 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     fn encode<M: Serialize>(&mut self, topic: Topic, message: &M) -> Result<usize, LogError> {
         let buffer = self.mcap.buffer();
         let start = buffer.len();
-        serde_json::to_writer(&mut *buffer, message).map_err(|source| {
-            buffer.truncate(start);
-            LogError::Encode {
-                what: topic.name(),
-                source,
-            }
-        })?;
+        append_json(buffer, topic, message)?;
         Ok(start)
     }
 
