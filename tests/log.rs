@@ -11,10 +11,12 @@
 //!
 //! Regenerate the fixture with `bash tests/data/regenerate.sh`.
 
+#[path = "common/shared_file.rs"]
+mod shared_file;
+
 use std::collections::{BTreeMap, HashMap};
 use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
 
 use mcap::{MessageStream, Summary};
 use parry2d_f64::math::{Pose as Pose2, Vector};
@@ -32,6 +34,7 @@ use ricochet::log::{
 };
 use ricochet::settings::Settings;
 use serde_json::Value;
+use shared_file::SharedFile;
 
 // ---------------------------------------------------------------------------------------
 // The synthetic run
@@ -371,33 +374,6 @@ fn repo_path(rel: &str) -> PathBuf {
 fn tmp_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name)
 }
-
-/// A `Write + Seek` whose bytes can be looked at while a writer owns it: what a killed
-/// process leaves on disk (no user-space buffer).
-#[derive(Clone, Default)]
-struct SharedFile(Arc<Mutex<Cursor<Vec<u8>>>>);
-
-impl SharedFile {
-    fn snapshot(&self) -> Vec<u8> {
-        self.0.lock().unwrap().get_ref().clone()
-    }
-}
-
-impl Write for SharedFile {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.lock().unwrap().write(buf)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
-
-impl Seek for SharedFile {
-    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
-        self.0.lock().unwrap().seek(pos)
-    }
-}
-
 fn count_events(events: &[Event], topic: Topic) -> u64 {
     events
         .iter()

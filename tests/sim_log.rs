@@ -23,11 +23,13 @@
 //! - a writer that was never finished (a killed process) leaves a file that reads back up
 //!   to its last flush.
 
+#[path = "common/shared_file.rs"]
+mod shared_file;
+
 use std::collections::{BTreeMap, HashMap};
-use std::io::{Cursor, Seek, SeekFrom, Write};
+use std::io::{Cursor, Seek, Write};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
 
 use mcap::{MessageStream, Summary};
 use ricochet::impact::ImpactError;
@@ -43,6 +45,7 @@ use ricochet::sim::{
     SimError, Simulation, StopReason,
 };
 use serde_json::Value;
+use shared_file::SharedFile;
 
 // ---------------------------------------------------------------------------------------
 // Running a scene with a log and a recorder
@@ -64,33 +67,6 @@ fn load(name: &str) -> Scene {
     ricochet::scene::load(repo_path(&format!("scenes/{name}.toml")))
         .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
-
-/// A `Write + Seek` whose bytes can be looked at while a writer owns it: what a killed
-/// process leaves on disk (no user-space buffer).
-#[derive(Clone, Default)]
-struct SharedFile(Arc<Mutex<Cursor<Vec<u8>>>>);
-
-impl SharedFile {
-    fn snapshot(&self) -> Vec<u8> {
-        self.0.lock().unwrap().get_ref().clone()
-    }
-}
-
-impl Write for SharedFile {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.lock().unwrap().write(buf)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
-
-impl Seek for SharedFile {
-    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
-        self.0.lock().unwrap().seek(pos)
-    }
-}
-
 /// Something done to the run after a number of samples.
 enum Hook<'a> {
     None,
