@@ -380,11 +380,20 @@ impl Simulation<'_> {
                 }
                 _ => (Real::NAN, None),
             };
-            let ratio = r.map_or("unknown".to_owned(), |r| format!("{r:.4}"));
+            // Without a previous hop to extrapolate from, t∞ is unknown: say so rather
+            // than print NaN.
+            let end = match r {
+                Some(r) => {
+                    format!("the hops would end at t∞ = {t_inf} s (extrapolated, ratio {r:.4})")
+                }
+                None => {
+                    "the end of the hops is unknown (no earlier hop to extrapolate from)".to_owned()
+                }
+            };
             let note = format!(
                 "accumulation of impacts: the last hop ({v:.3e} m/s) is below the resting speed \
                  {:.1e} m/s; the contact comes to rest (plastic normal impulses) and stays \
-                 closed; the hops would end at t∞ = {t_inf} s (extrapolated, ratio {ratio})",
+                 closed; {end}",
                 self.scales.v_rest
             );
             notes.push((pair, note, t_inf));
