@@ -79,7 +79,7 @@ fn simulate_logged(s: &Scene) -> (RunSummary, usize) {
         &s.model,
         (&s.name, &s.text),
         (&s.settings, &elastic()),
-        s.initial.t,
+        &s.initial,
         sim.scales().gap_tol,
     )
     .expect("log");

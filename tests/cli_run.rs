@@ -355,7 +355,7 @@ fn run_writes_where_told_and_the_same_bytes_as_the_library() {
         &s.model,
         (&s.name, &s.text),
         (&s.settings, &MaterialOverride::default()),
-        s.initial.t,
+        &s.initial,
         sim.scales().gap_tol,
     )
     .unwrap();

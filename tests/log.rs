@@ -1,16 +1,20 @@
 //! The MCAP log (`src/log/`): a synthetic run written with `LogWriter`, read back with the
 //! `mcap` crate (`Summary::read`, `MessageStream`) and with `ricochet::log::read`.
 //!
-//! The run: scene and settings metadata, a scene update drawing every shape kind, 100
+//! The run: scene and settings metadata, a geometry update drawing every shape kind, 100
 //! `/state` samples with their `/tf` transforms, 3 impacts with their impulse arrows, `/log`
 //! messages, a deletion, and the audit. Checked here: topics, schema names and encodings,
-//! message counts, exact round trip of every value, validation of every message against
-//! its shipped JSON schema, byte-identical output of two writes, reading a file cut short
+//! message counts, every chunk holding messages, exact round trip of every value (JSON and
+//! protobuf), validation of every JSON message against its shipped JSON schema and of the
+//! embedded protobuf schemas, byte-identical output of two writes, reading a file cut short
 //! (a killed process), finishing on drop, rejection of invalid times, the committed
-//! fixture `tests/data/fixture.mcap`, and `ricochet inspect`.
+//! fixtures `tests/data/fixture.mcap` (format 2) and `tests/data/fixture_v1.mcap` (format 1,
+//! still read), and `ricochet inspect`.
 //!
 //! Regenerate the fixture with `bash tests/data/regenerate.sh`.
 
+#[path = "common/chunks.rs"]
+mod chunks;
 #[path = "common/shared_file.rs"]
 mod shared_file;
 
@@ -26,11 +30,11 @@ use parry2d_f64::shape::{
 use ricochet::impact::{CollisionType, ContactVelocity, ImpactMatrix, Law};
 use ricochet::log::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
 use ricochet::log::foxglove::{
-    Color, DeletionType, ModelPrimitive, Pose, SceneEntityDeletion, SpherePrimitive, Vector3,
+    Color, Decode, Encode, SceneEntityDeletion, Timestamp, rgba, timestamp,
 };
 use ricochet::log::{
     Audit, ContactMode, ContactState, Counters, Ending, Energy, FrameTransforms, ImpactRecord, Log,
-    LogError, LogLevel, LogOptions, LogWriter, Planar, SceneUpdate, StateRecord, Time, Topic,
+    LogError, LogLevel, LogOptions, LogWriter, Planar, SceneUpdate, StateRecord, Topic,
 };
 use ricochet::settings::Settings;
 use serde_json::Value;
@@ -42,6 +46,7 @@ use shared_file::SharedFile;
 /// One message of the run, in the order written.
 #[derive(Clone, Debug, PartialEq)]
 enum Event {
+    Geometry(f64, SceneUpdate),
     Scene(f64, SceneUpdate),
     Tf(f64, FrameTransforms),
     State(StateRecord),
@@ -61,13 +66,12 @@ const N_STATES: usize = 100;
 const IMPACT_TIMES: [f64; 3] = [0.123, 0.456, 0.789];
 const SCENE_TEXT: &str = "version = 1\nname = \"synthetic\"\n\n[[body]]\nname = \"ball\"\nshape = { ball = { radius = 0.1 } }\n";
 
-const BLUE: Color = Color::rgba(0.2, 0.4, 0.9, 1.0);
-const GREY: Color = Color::rgba(0.5, 0.5, 0.5, 0.6);
+const BLUE: Color = rgba(0.2, 0.4, 0.9, 1.0);
+const GREY: Color = rgba(0.5, 0.5, 0.5, 0.6);
 
-/// A scene update drawing every shape kind: bodies (ball, capsule, cuboid, convex polygon,
-/// triangle) in their frames, obstacles (half-space, segment, polyline) in `world`, plus a
-/// sphere and a model added by hand so that every primitive type of `SceneEntity` is
-/// validated.
+/// A geometry update drawing every shape kind: bodies (ball, capsule, cuboid, convex
+/// polygon, triangle) in their frames, a skeleton, obstacles (half-space, segment,
+/// polyline) in `world`.
 fn scene_at_start() -> SceneUpdate {
     let style = DrawStyle::default();
     let ball = Ball::new(0.1);
@@ -95,7 +99,7 @@ fn scene_at_start() -> SceneUpdate {
         None,
     );
     let id = Pose2::IDENTITY;
-    let mut entities = vec![
+    let entities = vec![
         draw::body_entity(0.0, "ball", &[d(&ball, id, BLUE)], &style).unwrap(),
         draw::body_entity(
             0.0,
@@ -118,21 +122,16 @@ fn scene_at_start() -> SceneUpdate {
         draw::obstacle_entity(0.0, "ground", &[d(&ground, id, GREY)], &style).unwrap(),
         draw::obstacle_entity(0.0, "wall", &[d(&wall, id, GREY)], &style).unwrap(),
         draw::obstacle_entity(0.0, "steps", &[d(&steps, id, GREY)], &style).unwrap(),
+        draw::skeleton_entity(
+            0.0,
+            "fin",
+            &[Vector::new(0.3, 0.0)],
+            (Vector::new(0.1, 0.05), true),
+            BLUE,
+            &style,
+        )
+        .unwrap(),
     ];
-    entities[0].spheres.push(SpherePrimitive {
-        pose: Pose::planar(0.0, 0.0, 0.0),
-        size: Vector3::new(0.05, 0.05, 0.05),
-        color: BLUE,
-    });
-    entities[0].models.push(ModelPrimitive {
-        pose: Pose::planar(0.0, 0.0, 0.0),
-        scale: Vector3::new(1.0, 1.0, 1.0),
-        color: BLUE,
-        override_color: false,
-        url: String::new(),
-        media_type: "model/gltf-binary".to_owned(),
-        data: "AAAA".to_owned(),
-    });
     SceneUpdate {
         deletions: vec![],
         entities,
@@ -223,7 +222,7 @@ fn impact(k: usize) -> ImpactRecord {
 
 fn synthetic() -> Run {
     let mut events = vec![
-        Event::Scene(0.0, scene_at_start()),
+        Event::Geometry(0.0, scene_at_start()),
         Event::Log(0.0, LogLevel::Info, "run started".to_owned()),
     ];
     let mut next_impact = 0;
@@ -231,7 +230,7 @@ fn synthetic() -> Run {
         let s = state(i);
         while next_impact < IMPACT_TIMES.len() && IMPACT_TIMES[next_impact] <= s.t {
             let imp = impact(next_impact);
-            let arrow = draw::impulse_arrow(&imp, &ArrowStyle::default()).unwrap();
+            let arrow = draw::impulse_arrow(&imp, 0.4, &ArrowStyle::default()).unwrap();
             events.push(Event::Impact(Box::new(imp.clone())));
             events.push(Event::Scene(
                 imp.t,
@@ -259,9 +258,10 @@ fn synthetic() -> Run {
         "energy drift above 1e-6 J".to_owned(),
     ));
     let deletion = SceneEntityDeletion {
-        timestamp: Time::from_seconds(0.99).unwrap(),
-        deletion_type: DeletionType::MatchingId,
-        id: "impulse/0".to_owned(),
+        timestamp: Some(timestamp(0.99).unwrap()),
+        // MATCHING_ID
+        r#type: 0,
+        id: "impulse/ball/ground".to_owned(),
     };
     events.push(Event::Scene(
         0.99,
@@ -304,6 +304,7 @@ fn write_prefix<W: Write + Seek + Send + 'static>(run: &Run, log: &mut LogWriter
     log.settings(&run.settings).unwrap();
     for event in &run.events[..n] {
         match event {
+            Event::Geometry(t, update) => log.geometry(*t, update).unwrap(),
             Event::Scene(t, update) => log.scene_update(*t, update).unwrap(),
             Event::Tf(t, tf) => log.transforms(*t, tf).unwrap(),
             Event::State(s) => log.state(s).unwrap(),
@@ -322,20 +323,35 @@ fn write_run(run: &Run, options: LogOptions) -> Vec<u8> {
     log.finish().unwrap().into_inner()
 }
 
-/// The topic and time (s) of an event, and its message as JSON.
-fn expected_message(event: &Event) -> (Topic, f64, Value) {
-    let json = |v: &dyn erased::Json| v.to_json();
+/// What a message holds: JSON (ricochet's topics) or protobuf bytes (Foxglove's).
+#[derive(Clone, Debug, PartialEq)]
+enum Payload {
+    Json(Value),
+    Protobuf(Vec<u8>),
+}
+
+/// The protobuf encoding of a Foxglove message, by the SDK.
+fn protobuf<M: Encode>(m: &M) -> Payload {
+    let mut bytes = Vec::new();
+    m.encode(&mut bytes).unwrap();
+    Payload::Protobuf(bytes)
+}
+
+/// The topic and time (s) of an event, and its message.
+fn expected_message(event: &Event) -> (Topic, f64, Payload) {
+    let json = |v: &dyn erased::Json| Payload::Json(v.to_json());
     match event {
-        Event::Scene(t, u) => (Topic::Scene, *t, json(u)),
-        Event::Tf(t, tf) => (Topic::Tf, *t, json(tf)),
+        Event::Geometry(t, u) => (Topic::Geometry, *t, protobuf(u)),
+        Event::Scene(t, u) => (Topic::Scene, *t, protobuf(u)),
+        Event::Tf(t, tf) => (Topic::Tf, *t, protobuf(tf)),
         Event::State(s) => (Topic::State, s.t, json(s)),
         Event::Impact(i) => (Topic::Impacts, i.t, json(i)),
         Event::Log(t, level, message) => (
             Topic::Log,
             *t,
-            json(&Log {
-                timestamp: Time::from_seconds(*t).unwrap(),
-                level: *level,
+            protobuf(&Log {
+                timestamp: Some(timestamp(*t).unwrap()),
+                level: *level as i32,
                 message: message.clone(),
                 name: "ricochet".to_owned(),
                 file: String::new(),
@@ -390,24 +406,38 @@ fn topics_schemas_and_counts_read_back_with_the_mcap_crate() {
     let bytes = write_run(&run, LogOptions::default());
     let summary = Summary::read(&bytes).unwrap().expect("a summary section");
 
-    let expected: BTreeMap<&str, (&str, u64)> = BTreeMap::from([
-        ("/state", ("ricochet.State", N_STATES as u64)),
-        ("/impacts", ("ricochet.Impact", 3)),
-        ("/scene", ("foxglove.SceneUpdate", 1 + 3 + 1)),
-        ("/tf", ("foxglove.FrameTransforms", N_STATES as u64)),
-        ("/log", ("foxglove.Log", 1 + 3 + 1)),
+    // topic → (schema, encoding, count)
+    let expected: BTreeMap<&str, (&str, &str, u64)> = BTreeMap::from([
+        ("/state", ("ricochet.State", "json", N_STATES as u64)),
+        ("/impacts", ("ricochet.Impact", "json", 3)),
+        ("/geometry", ("foxglove.SceneUpdate", "protobuf", 1)),
+        ("/scene", ("foxglove.SceneUpdate", "protobuf", 3 + 1)),
+        (
+            "/tf",
+            ("foxglove.FrameTransforms", "protobuf", N_STATES as u64),
+        ),
+        ("/log", ("foxglove.Log", "protobuf", 1 + 3 + 1)),
     ]);
     let stats = summary.stats.as_ref().unwrap();
     let mut seen = BTreeMap::new();
     for (id, channel) in &summary.channels {
         let schema = channel.schema.as_ref().expect("every channel has a schema");
-        assert_eq!(channel.message_encoding, "json");
-        assert_eq!(schema.encoding, "jsonschema");
+        let schema_encoding = match channel.message_encoding.as_str() {
+            "json" => "jsonschema",
+            other => other,
+        };
+        assert_eq!(schema.encoding, schema_encoding, "{}", channel.topic);
         let count = stats.channel_message_counts.get(id).copied().unwrap_or(0);
-        seen.insert(channel.topic.as_str(), (schema.name.as_str(), count));
+        let encoding = channel.message_encoding.as_str();
+        seen.insert(
+            channel.topic.as_str(),
+            (schema.name.as_str(), encoding, count),
+        );
     }
     assert_eq!(seen, expected);
-    assert_eq!(stats.message_count, 2 * N_STATES as u64 + 3 + 5 + 5);
+    // `/geometry` and `/scene` share one schema record.
+    assert_eq!(summary.schemas.len(), 5);
+    assert_eq!(stats.message_count, 2 * N_STATES as u64 + 3 + 1 + 4 + 5);
     assert_eq!(stats.message_start_time, 0);
     assert_eq!(stats.message_end_time, 990_000_000);
     let names: Vec<&str> = summary
@@ -415,15 +445,37 @@ fn topics_schemas_and_counts_read_back_with_the_mcap_crate() {
         .iter()
         .map(|m| m.name.as_str())
         .collect();
-    assert_eq!(names, ["scene", "settings", "audit"]);
+    assert_eq!(names, ["ricochet", "scene", "settings", "audit"]);
     // Metadata records read through the summary's index.
-    let scene = mcap::read::metadata(&bytes, &summary.metadata_indexes[0]).unwrap();
+    let format = mcap::read::metadata(&bytes, &summary.metadata_indexes[0]).unwrap();
+    assert_eq!(format.metadata["format_version"], "2");
+    let scene = mcap::read::metadata(&bytes, &summary.metadata_indexes[1]).unwrap();
     assert_eq!(scene.metadata["name"], "synthetic");
     assert_eq!(scene.metadata["text"], SCENE_TEXT);
 }
 
+/// Readers that bundle `@mcap/core` before 2025 (Foxglove Studio 1.48) refuse a chunk
+/// without a message index; format 1 began every log with one (its schemas and channels).
+#[test]
+fn every_chunk_holds_messages() {
+    let run = synthetic();
+    for chunk_size in [64 * 1024, 2048, 1] {
+        let options = LogOptions {
+            chunk_size,
+            ..LogOptions::default()
+        };
+        let bytes = write_run(&run, options);
+        let n = chunks::assert_every_chunk_has_messages(&bytes);
+        assert!(n >= 1, "{chunk_size}: {n} chunks");
+    }
+    // The check can fail: the format 1 fixture has such a chunk.
+    let v1 = std::fs::read(repo_path(FIXTURE_V1)).unwrap();
+    let caught = std::panic::catch_unwind(|| chunks::assert_every_chunk_has_messages(&v1));
+    assert!(caught.is_err(), "the format 1 fixture passed the check");
+}
+
 /// Exact (bit-for-bit) decoding needs `serde_json/float_roundtrip`, which the
-/// `jsonschema` dev-dependency turns on for test builds.
+/// `jsonschema` dev-dependency turns on for test builds; protobuf doubles are their bits.
 #[test]
 fn every_value_round_trips_exactly() {
     let run = synthetic();
@@ -440,7 +492,10 @@ fn every_value_round_trips_exactly() {
         let seq = sequences.entry(msg.channel.topic.clone()).or_default();
         assert_eq!(msg.sequence, *seq);
         *seq += 1;
-        let got: Value = serde_json::from_slice(&msg.data).unwrap();
+        let got = match &expected {
+            Payload::Json(_) => Payload::Json(serde_json::from_slice(&msg.data).unwrap()),
+            Payload::Protobuf(_) => Payload::Protobuf(msg.data.to_vec()),
+        };
         assert_eq!(got, expected);
         // Typed round trip, compared with the written value bit for bit (==).
         match event {
@@ -452,51 +507,61 @@ fn every_value_round_trips_exactly() {
                 &serde_json::from_slice::<ImpactRecord>(&msg.data).unwrap(),
                 &**i
             ),
-            Event::Scene(_, u) => assert_eq!(
-                &serde_json::from_slice::<SceneUpdate>(&msg.data).unwrap(),
-                u
-            ),
-            Event::Tf(_, tf) => assert_eq!(
-                &serde_json::from_slice::<FrameTransforms>(&msg.data).unwrap(),
-                tf
-            ),
+            Event::Geometry(_, u) | Event::Scene(_, u) => {
+                assert_eq!(&SceneUpdate::decode(&msg.data[..]).unwrap(), u)
+            }
+            Event::Tf(_, tf) => assert_eq!(&FrameTransforms::decode(&msg.data[..]).unwrap(), tf),
             Event::Log(..) => {
-                let log: Log = serde_json::from_slice(&msg.data).unwrap();
-                assert_eq!(log.timestamp.as_nanos(), msg.log_time);
+                let log = Log::decode(&msg.data[..]).unwrap();
+                assert_eq!(log.timestamp.unwrap().total_nanos(), msg.log_time);
             }
         }
         n += 1;
     }
     assert_eq!(n, run.events.len());
-    // A few values by hand, independent of serde: t = 0.37 s is sec 0, nsec 370 000 000.
+    // A few values by hand, independent of the encoders: t = 0.37 s is sec 0, nsec
+    // 370 000 000.
     let tf = run.events.iter().find_map(|e| match e {
         Event::Tf(t, tf) if (*t - 0.37).abs() < 1e-12 => Some(tf),
         _ => None,
     });
     assert_eq!(
         tf.unwrap().transforms[0].timestamp,
-        Time {
-            sec: 0,
-            nsec: 370_000_000
-        }
+        Some(Timestamp::new(0, 370_000_000))
     );
 }
 
 #[test]
-fn every_message_validates_against_its_shipped_schema() {
+fn every_message_validates_against_its_schema() {
+    use prost_types::FileDescriptorSet;
     let run = synthetic();
     let bytes = write_run(&run, LogOptions::default());
     let summary = Summary::read(&bytes).unwrap().unwrap();
     let mut validators = HashMap::new();
     for channel in summary.channels.values() {
         let schema = channel.schema.as_ref().unwrap();
-        // The embedded schema is the shipped file, byte for byte.
+        if channel.message_encoding == "protobuf" {
+            // The embedded schema is the SDK's descriptor set, and it defines the type.
+            let sdk = match schema.name.as_str() {
+                "foxglove.SceneUpdate" => SceneUpdate::get_schema(),
+                "foxglove.FrameTransforms" => FrameTransforms::get_schema(),
+                "foxglove.Log" => Log::get_schema(),
+                other => panic!("unexpected schema {other}"),
+            };
+            assert_eq!(&schema.data[..], &sdk.unwrap().data[..], "{}", schema.name);
+            let set = <FileDescriptorSet as prost::Message>::decode(&schema.data[..]).unwrap();
+            let (package, name) = schema.name.split_once('.').unwrap();
+            let defined = (set.file.iter())
+                .filter(|f| f.package() == package)
+                .flat_map(|f| &f.message_type)
+                .any(|m| m.name() == name);
+            assert!(defined, "{} not defined by its descriptor set", schema.name);
+            continue;
+        }
+        // The embedded JSON schema is the shipped file, byte for byte.
         let file = match schema.name.as_str() {
             "ricochet.State" => "schemas/ricochet/State.json",
             "ricochet.Impact" => "schemas/ricochet/Impact.json",
-            "foxglove.SceneUpdate" => "schemas/foxglove/SceneUpdate.json",
-            "foxglove.FrameTransforms" => "schemas/foxglove/FrameTransforms.json",
-            "foxglove.Log" => "schemas/foxglove/Log.json",
             other => panic!("unexpected schema {other}"),
         };
         assert_eq!(
@@ -515,8 +580,26 @@ fn every_message_validates_against_its_shipped_schema() {
     let mut n = 0;
     for msg in MessageStream::new(&bytes).unwrap() {
         let msg = msg.unwrap();
+        n += 1;
+        let Some(validator) = validators.get(&msg.channel.topic) else {
+            // Protobuf: decodes as its type, and is the canonical encoding of what it
+            // decodes to (nothing unknown or left over).
+            let data = &msg.data[..];
+            let again = match msg.channel.topic.as_str() {
+                "/geometry" | "/scene" => reencode(SceneUpdate::decode(data).unwrap()),
+                "/tf" => reencode(FrameTransforms::decode(data).unwrap()),
+                "/log" => reencode(Log::decode(data).unwrap()),
+                other => panic!("unexpected topic {other}"),
+            };
+            assert_eq!(
+                again, data,
+                "{} message {}",
+                msg.channel.topic, msg.sequence
+            );
+            continue;
+        };
         let json: Value = serde_json::from_slice(&msg.data).unwrap();
-        let errors: Vec<String> = validators[&msg.channel.topic]
+        let errors: Vec<String> = validator
             .iter_errors(&json)
             .map(|e| format!("{} at {}", e, e.instance_path()))
             .collect();
@@ -526,9 +609,14 @@ fn every_message_validates_against_its_shipped_schema() {
             msg.channel.topic,
             msg.sequence
         );
-        n += 1;
     }
     assert_eq!(n, run.events.len());
+}
+
+fn reencode<M: Encode>(m: M) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    m.encode(&mut bytes).unwrap();
+    bytes
 }
 
 #[test]
@@ -563,19 +651,6 @@ fn schemas_reject_what_they_should() {
     let mut bad_law = imp;
     bad_law["law"] = Value::from("hertz");
     assert!(!v.is_valid(&bad_law), "an unknown law");
-
-    let v = schema("schemas/foxglove/SceneUpdate.json");
-    let scene = serde_json::to_value(scene_at_start()).unwrap();
-    assert!(v.is_valid(&scene));
-    let mut no_models = scene;
-    no_models["entities"][0]
-        .as_object_mut()
-        .unwrap()
-        .remove("models");
-    assert!(
-        !v.is_valid(&no_models),
-        "Foxglove requires every primitive list"
-    );
 }
 
 #[test]
@@ -814,6 +889,7 @@ fn an_io_error_of_the_writer_thread_is_reported_by_a_later_call() {
     let mut first = None;
     for (k, event) in run.events.iter().enumerate() {
         let result = match event {
+            Event::Geometry(t, update) => log.geometry(*t, update),
             Event::Scene(t, update) => log.scene_update(*t, update),
             Event::Tf(t, tf) => log.transforms(*t, tf),
             Event::State(s) => log.state(s),
@@ -862,6 +938,10 @@ fn invalid_times_and_non_finite_values_are_errors() {
             Err(LogError::InvalidTime { .. })
         ));
         assert!(matches!(
+            log.geometry(t, &SceneUpdate::default()),
+            Err(LogError::InvalidTime { .. })
+        ));
+        assert!(matches!(
             log.transforms(t, &FrameTransforms::default()),
             Err(LogError::InvalidTime { .. })
         ));
@@ -879,13 +959,34 @@ fn invalid_times_and_non_finite_values_are_errors() {
     i.delta_u[2] = f64::NEG_INFINITY;
     assert!(matches!(log.impact(&i), Err(LogError::NonFinite { .. })));
     let mut scene = scene_at_start();
-    scene.entities[2].cubes[0].size.y = f64::NAN;
-    match log.scene_update(0.0, &scene) {
-        Err(LogError::NonFinite { field, .. }) => assert_eq!(field, "entities[2].cubes[0].size.y"),
+    scene.entities[2].cubes[0].size.as_mut().unwrap().y = f64::NAN;
+    match log.geometry(0.0, &scene) {
+        Err(LogError::NonFinite { field, what, .. }) => {
+            assert_eq!(
+                (what, field.as_str()),
+                ("/geometry", "entities[2].cubes[0].size.y")
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+    let imp = impact(0);
+    let mut arrow = draw::impulse_arrow(&imp, f64::INFINITY, &ArrowStyle::default()).unwrap();
+    arrow.id = "x".to_owned();
+    let update = SceneUpdate {
+        deletions: vec![],
+        entities: vec![arrow],
+    };
+    match log.scene_update(0.0, &update) {
+        Err(LogError::NonFinite { field, what, .. }) => {
+            assert_eq!(
+                (what, field.as_str()),
+                ("/scene", "entities[0].arrows[0].shaft_length")
+            )
+        }
         other => panic!("{other:?}"),
     }
     let mut tf = draw::body_transforms(0.0, [("ball", Pose2::IDENTITY)]).unwrap();
-    tf.transforms[0].rotation.z = f64::INFINITY;
+    tf.transforms[0].rotation.as_mut().unwrap().z = f64::INFINITY;
     match log.transforms(0.0, &tf) {
         Err(LogError::NonFinite { field, .. }) => assert_eq!(field, "transforms[0].rotation.z"),
         other => panic!("{other:?}"),
@@ -901,12 +1002,17 @@ fn invalid_times_and_non_finite_values_are_errors() {
 /// The committed fixture, which older and newer readers alike must keep reading.
 const FIXTURE: &str = "tests/data/fixture.mcap";
 
+/// The same synthetic run written by format 1 (JSON Foxglove topics, the bodies on
+/// `/scene`, a first chunk without messages), committed before format 2.
+const FIXTURE_V1: &str = "tests/data/fixture_v1.mcap";
+
 #[test]
 fn fixture_reads_back_and_matches_the_writer() {
     let committed = std::fs::read(repo_path(FIXTURE)).unwrap();
     let run = synthetic();
     let read = ricochet::log::read_bytes(&committed).unwrap();
     assert_eq!(read.ending, Ending::Complete);
+    assert_eq!(read.format_version, 2);
     assert_eq!(read.audit.as_ref(), Some(&run.audit));
     assert_eq!(read.impacts.len(), 3);
     assert_eq!(read.count(Topic::State), N_STATES as u64);
@@ -919,6 +1025,22 @@ fn fixture_reads_back_and_matches_the_writer() {
         committed.len(),
         fresh.len()
     );
+}
+
+/// A format 1 log is still read: its metadata, ledger and samples are unchanged in
+/// format 2 (only Foxglove's topics changed).
+#[test]
+fn a_format_1_log_is_still_read() {
+    let run = synthetic();
+    let read = ricochet::log::read_bytes(&std::fs::read(repo_path(FIXTURE_V1)).unwrap()).unwrap();
+    assert_eq!(read.ending, Ending::Complete);
+    assert_eq!(read.format_version, 1);
+    assert_eq!(read.scene.as_ref().unwrap().text, SCENE_TEXT);
+    assert_eq!(read.audit.as_ref(), Some(&run.audit));
+    assert_eq!(read.impacts, (0..3).map(impact).collect::<Vec<_>>());
+    assert_eq!(read.last_state, Some(state(N_STATES - 1)));
+    assert_eq!(read.count(Topic::Geometry), 0);
+    assert_eq!(read.count(Topic::Scene), 1 + 3 + 1);
 }
 
 /// Rewrites the fixture: `cargo test --test log -- --ignored regenerate_fixture`.
@@ -944,12 +1066,24 @@ fn foxglove_layout_refers_to_what_is_logged() {
         kinds.push(kind);
         match kind {
             "3D" => {
-                assert_eq!(config["followTf"], draw::WORLD_FRAME);
-                for topic in config["topics"].as_object().unwrap().keys() {
-                    assert!(
-                        topic_names.contains(&topic.as_str()),
-                        "3D panel topic {topic}"
-                    );
+                // The camera follows the view frame; frame labels (which hide the bodies)
+                // are off, under `scene.transforms`, where Studio reads them.
+                assert_eq!(config["followTf"], draw::VIEW_FRAME);
+                assert_eq!(config["followMode"], "follow-position");
+                assert_eq!(config["scene"]["transforms"]["showLabel"], false);
+                assert!(
+                    config
+                        .get("transforms")
+                        .is_none_or(|t| t.get("showLabel").is_none())
+                );
+                let mut shown: Vec<&str> = (config["topics"].as_object().unwrap().iter())
+                    .filter(|(_, c)| c["visible"] == true)
+                    .map(|(topic, _)| topic.as_str())
+                    .collect();
+                shown.sort();
+                assert_eq!(shown, [Topic::Geometry.name(), Topic::Scene.name()]);
+                for topic in &shown {
+                    assert!(topic_names.contains(topic), "3D panel topic {topic}");
                 }
             }
             "Plot" => {
@@ -957,8 +1091,9 @@ fn foxglove_layout_refers_to_what_is_logged() {
                     let path = path["value"].as_str().unwrap();
                     let (topic, fields) = path.split_once('.').unwrap();
                     let topic = Topic::from_name(topic).unwrap_or_else(|| panic!("{path}"));
-                    // Follow the fields through the topic's schema.
-                    let mut schema: Value = serde_json::from_str(topic.schema()).unwrap();
+                    // Follow the fields through the topic's JSON schema.
+                    assert!(topic.is_json(), "plot path {path} on a protobuf topic");
+                    let mut schema: Value = serde_json::from_slice(&topic.schema()).unwrap();
                     for field in fields.split('.') {
                         schema = schema["properties"][field].clone();
                         assert!(!schema.is_null(), "plot path {path}: no field {field}");
@@ -974,7 +1109,7 @@ fn foxglove_layout_refers_to_what_is_logged() {
         }
     }
     kinds.sort();
-    assert_eq!(kinds, ["3D", "Plot", "RawMessages", "RosOut"]);
+    assert_eq!(kinds, ["3D", "Plot", "Plot", "RawMessages", "RosOut"]);
     // Every panel of the layout tree is configured, and every configured panel is placed.
     fn leaves(node: &Value, out: &mut Vec<String>) {
         match node {
@@ -1010,6 +1145,7 @@ fn inspect_prints_the_summary_of_a_run() {
     );
     for needle in [
         "scene: synthetic",
+        "log format 2",
         "complete",
         "output_rate",
         "impacts: 3",

@@ -4,12 +4,15 @@
 //! back with the `mcap` crate (`Summary::read`, `MessageStream`) and `ricochet::log`.
 //!
 //! Checked here:
-//! - the five topics, their schema names and encodings, and message counts that follow
+//! - the six topics, their schema names and encodings, and message counts that follow
 //!   from the run (`/impacts` = impacts applied, `/state` = the output grid up to the stop
-//!   time + two samples per impact instant + the final one, `/tf` = `/state`, `/scene` =
-//!   the scene + one arrow per impact, `/log` = the messages the run sent);
-//! - every message validates against the schema embedded in the file, which is the
-//!   shipped file under `schemas/`;
+//!   time + two samples per impact instant + the final one, `/tf` = `/state`, `/geometry`
+//!   = one, `/scene` = one arrow per impact, `/log` = the messages the run sent + one line
+//!   per impact);
+//! - every JSON message validates against the schema embedded in the file, which is the
+//!   shipped file under `schemas/`; every protobuf message decodes as its type;
+//! - every bundled scene: every chunk holds messages, every message decodes, and at a
+//!   dozen times the latest `/geometry` message draws every body and obstacle;
 //! - `/state` and `/impacts` equal, value for value, what the [`Recorder`] saw; the ledger
 //!   obeys Eq. (29), Newton's law and the energy balance on its own; the first impact of
 //!   the double pendulum is [P] Table 2 row 1; `/tf` is the pendulum's kinematics computed
@@ -23,6 +26,8 @@
 //! - a writer that was never finished (a killed process) leaves a file that reads back up
 //!   to its last flush.
 
+#[path = "common/chunks.rs"]
+mod chunks;
 #[path = "common/shared_file.rs"]
 mod shared_file;
 
@@ -33,9 +38,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use mcap::{MessageStream, Summary};
 use ricochet::impact::ImpactError;
+use ricochet::log::foxglove::{Decode, Encode};
 use ricochet::log::{
     Ending, FrameTransforms, ImpactCause, ImpactRecord, Log, LogLevel, LogOptions, LogWriter,
-    RunLogger, StateRecord, Topic,
+    RunLogger, SceneUpdate, StateRecord, Topic,
 };
 use ricochet::model::Model;
 use ricochet::scene::Scene;
@@ -153,7 +159,7 @@ fn run_with<W: Write + Seek + Send + 'static>(
         &scene.model,
         (&scene.name, &scene.text),
         (&scene.settings, &overrides),
-        scene.initial.t,
+        &scene.initial,
         sim.scales().gap_tol,
     )
     .unwrap();
@@ -206,23 +212,37 @@ fn run_scene(name: &str) -> Run {
     run_hooked(load(name), MaterialOverride::default(), Hook::None, None)
 }
 
-/// Every message of a log, in file order: topic, log time (ns), JSON.
-fn messages(bytes: &[u8]) -> Vec<(String, u64, Value)> {
+/// Every message of a log, in file order: topic, log time (ns), data.
+fn messages(bytes: &[u8]) -> Vec<(String, u64, Vec<u8>)> {
     MessageStream::new(bytes)
         .unwrap()
         .map(|m| {
             let m = m.unwrap();
-            let json = serde_json::from_slice(&m.data).unwrap();
-            (m.channel.topic.clone(), m.log_time, json)
+            (m.channel.topic.clone(), m.log_time, m.data.into_owned())
         })
         .collect()
 }
 
+/// The messages of a JSON topic, decoded.
 fn on_topic<T: serde::de::DeserializeOwned>(bytes: &[u8], topic: Topic) -> Vec<T> {
+    assert!(topic.is_json(), "{}", topic.name());
     messages(bytes)
         .into_iter()
         .filter(|(name, _, _)| name == topic.name())
-        .map(|(_, _, json)| serde_json::from_value(json).unwrap())
+        .map(|(_, _, data)| serde_json::from_slice(&data).unwrap())
+        .collect()
+}
+
+/// The messages of a protobuf topic, decoded.
+fn on_protobuf_topic<T: Decode>(bytes: &[u8], topic: Topic) -> Vec<T>
+where
+    T::Error: std::fmt::Debug,
+{
+    assert!(!topic.is_json(), "{}", topic.name());
+    messages(bytes)
+        .into_iter()
+        .filter(|(name, _, _)| name == topic.name())
+        .map(|(_, _, data)| T::decode(&data[..]).unwrap())
         .collect()
 }
 
@@ -263,8 +283,9 @@ fn topics_schemas_and_counts_follow_the_run() {
         let mut seen = BTreeMap::new();
         for (id, channel) in &summary.channels {
             let schema = channel.schema.as_ref().expect("every channel has a schema");
-            assert_eq!(channel.message_encoding, "json", "{name}");
-            assert_eq!(schema.encoding, "jsonschema", "{name}");
+            let topic = Topic::from_name(&channel.topic).unwrap();
+            assert_eq!(channel.message_encoding, topic.message_encoding(), "{name}");
+            assert_eq!(schema.encoding, topic.schema_encoding(), "{name}");
             let count = stats.channel_message_counts.get(id).copied().unwrap_or(0);
             seen.insert(channel.topic.clone(), (schema.name.clone(), count));
         }
@@ -273,9 +294,14 @@ fn topics_schemas_and_counts_follow_the_run() {
         let expected: BTreeMap<String, (String, u64)> = [
             ("/state", "ricochet.State", samples),
             ("/impacts", "ricochet.Impact", impacts),
-            ("/scene", "foxglove.SceneUpdate", 1 + impacts),
+            ("/geometry", "foxglove.SceneUpdate", 1),
+            ("/scene", "foxglove.SceneUpdate", impacts),
             ("/tf", "foxglove.FrameTransforms", samples),
-            ("/log", "foxglove.Log", run.seen.messages.len() as u64),
+            (
+                "/log",
+                "foxglove.Log",
+                run.seen.messages.len() as u64 + impacts,
+            ),
         ]
         .into_iter()
         .map(|(t, s, n)| (t.to_owned(), (s.to_owned(), n)))
@@ -304,7 +330,8 @@ fn topics_schemas_and_counts_follow_the_run() {
         let names: Vec<&str> = (summary.metadata_indexes.iter())
             .map(|m| m.name.as_str())
             .collect();
-        assert_eq!(names, ["scene", "settings", "audit"], "{name}");
+        assert_eq!(names, ["ricochet", "scene", "settings", "audit"], "{name}");
+        chunks::assert_every_chunk_has_messages(&run.bytes);
     }
 }
 
@@ -319,10 +346,8 @@ fn every_message_validates_against_the_schema_in_the_file() {
             let file = match schema.name.as_str() {
                 "ricochet.State" => "schemas/ricochet/State.json",
                 "ricochet.Impact" => "schemas/ricochet/Impact.json",
-                "foxglove.SceneUpdate" => "schemas/foxglove/SceneUpdate.json",
-                "foxglove.FrameTransforms" => "schemas/foxglove/FrameTransforms.json",
-                "foxglove.Log" => "schemas/foxglove/Log.json",
-                other => panic!("unexpected schema {other}"),
+                // Protobuf: the Foxglove SDK's descriptors (tests/log.rs checks them).
+                _ => continue,
             };
             // The embedded schema is the shipped file, byte for byte.
             assert_eq!(
@@ -337,16 +362,106 @@ fn every_message_validates_against_the_schema_in_the_file() {
             );
         }
         let mut per_topic: BTreeMap<String, u64> = BTreeMap::new();
-        for (topic, _, json) in messages(&run.bytes) {
-            let errors: Vec<String> = validators[&topic]
-                .iter_errors(&json)
-                .map(|e| format!("{e} at {}", e.instance_path()))
-                .collect();
-            assert!(errors.is_empty(), "{name} {topic}: {errors:?}\n{json}");
+        for (topic, _, data) in messages(&run.bytes) {
+            assert_decodes(&topic, &data, validators.get(&topic));
             *per_topic.entry(topic).or_default() += 1;
         }
-        // Every topic had messages to validate.
-        assert_eq!(per_topic.len(), 5, "{name}: {per_topic:?}");
+        // Every topic had messages to check.
+        assert_eq!(per_topic.len(), 6, "{name}: {per_topic:?}");
+    }
+}
+
+/// A message of `topic` decodes: JSON that passes `validator`, or protobuf of the topic's
+/// type that is the canonical encoding of what it decodes to.
+fn assert_decodes(topic: &str, data: &[u8], validator: Option<&jsonschema::Validator>) {
+    fn canonical<M: Encode>(m: M) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        m.encode(&mut bytes).unwrap();
+        bytes
+    }
+    if let Some(validator) = validator {
+        let json: Value = serde_json::from_slice(data).unwrap();
+        let errors: Vec<String> = validator
+            .iter_errors(&json)
+            .map(|e| format!("{e} at {}", e.instance_path()))
+            .collect();
+        assert!(errors.is_empty(), "{topic}: {errors:?}\n{json}");
+        return;
+    }
+    let again = match topic {
+        "/geometry" | "/scene" => canonical(SceneUpdate::decode(data).unwrap()),
+        "/tf" => canonical(FrameTransforms::decode(data).unwrap()),
+        "/log" => canonical(Log::decode(data).unwrap()),
+        other => panic!("unexpected topic {other}"),
+    };
+    assert_eq!(again, data, "{topic}");
+}
+
+/// Every bundled scene, run as the scene says: every chunk of its log holds messages,
+/// every message decodes, and at a dozen times spread over the run the latest `/geometry`
+/// message (what a viewer that seeks there shows) draws every body and every obstacle.
+#[test]
+fn every_bundled_scene_logs_the_whole_mechanism_at_any_time() {
+    let mut scenes: Vec<String> = std::fs::read_dir(repo_path("scenes"))
+        .unwrap()
+        .filter_map(|e| {
+            let path = e.unwrap().path();
+            (path.extension()? == "toml").then(|| path.file_stem()?.to_str().map(str::to_owned))?
+        })
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 9, "{scenes:?}");
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+    for name in &scenes {
+        let run = run_scene(name);
+        let model = &run.scene.model;
+        chunks::assert_every_chunk_has_messages(&run.bytes);
+        let all = messages(&run.bytes);
+        for (topic, _, data) in &all {
+            // JSON topics are validated above; here they must at least parse.
+            if Topic::from_name(topic).unwrap().is_json() {
+                serde_json::from_slice::<Value>(data).unwrap();
+            } else {
+                assert_decodes(topic, data, None);
+            }
+        }
+        let geometry: Vec<(u64, SceneUpdate)> = (all.iter())
+            .filter(|(topic, _, _)| topic == Topic::Geometry.name())
+            .map(|(_, ns, data)| (*ns, SceneUpdate::decode(&data[..]).unwrap()))
+            .collect();
+        let t_stop = (run.summary.state.t * 1e9).round() as u64;
+        for _ in 0..12 {
+            // xorshift64*: times spread over [0, t_stop].
+            seed ^= seed >> 12;
+            seed ^= seed << 25;
+            seed ^= seed >> 27;
+            let r = (seed.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64;
+            let t = (r * t_stop as f64) as u64;
+            let (_, latest) = (geometry.iter().rev())
+                .find(|(ns, _)| *ns <= t)
+                .unwrap_or_else(|| panic!("{name}: no geometry at {t} ns"));
+            let drawn = |id: &str| {
+                (latest.entities.iter()).any(|e| {
+                    e.id == id
+                        && e.cubes.len() + e.cylinders.len() + e.lines.len() + e.triangles.len() > 0
+                })
+            };
+            for body in model.bodies() {
+                assert!(
+                    drawn(&format!("body/{}", body.name))
+                        || drawn(&format!("visual/{}", body.name)),
+                    "{name} at {t} ns: body {} is not drawn",
+                    body.name
+                );
+            }
+            for c in model.colliders().iter().filter(|c| c.body.is_none()) {
+                assert!(
+                    drawn(&format!("world/{}", c.name)),
+                    "{name} at {t} ns: obstacle {} is not drawn",
+                    c.name
+                );
+            }
+        }
     }
 }
 
@@ -360,7 +475,7 @@ fn state_samples_are_what_the_run_reported() {
         let all = messages(&run.bytes);
         let states: Vec<(u64, StateRecord)> = (all.iter())
             .filter(|(t, _, _)| t == Topic::State.name())
-            .map(|(_, ns, json)| (*ns, serde_json::from_value(json.clone()).unwrap()))
+            .map(|(_, ns, data)| (*ns, serde_json::from_slice(data).unwrap()))
             .collect();
         assert_eq!(states.len(), run.seen.samples.len(), "{name}");
         let mut last_count = 0;
@@ -517,10 +632,11 @@ fn first_double_pendulum_impact_is_table_2_row_1() {
 #[test]
 fn transforms_are_the_double_pendulum_kinematics() {
     let run = run_scene("kane_double_pendulum");
-    let tfs: Vec<FrameTransforms> = on_topic(&run.bytes, Topic::Tf);
+    let tfs: Vec<FrameTransforms> = on_protobuf_topic(&run.bytes, Topic::Tf);
     let states: Vec<StateRecord> = on_topic(&run.bytes, Topic::State);
     assert_eq!(tfs.len(), states.len());
-    let angle = |q: &ricochet::log::foxglove::Quaternion| {
+    let angle = |q: &Option<ricochet::log::foxglove::Quaternion>| {
+        let q = q.unwrap();
         assert_eq!((q.x, q.y), (0.0, 0.0));
         2.0 * q.z.atan2(q.w)
     };
@@ -528,43 +644,73 @@ fn transforms_are_the_double_pendulum_kinematics() {
         let d = (a - b).rem_euclid(std::f64::consts::TAU);
         d.min(std::f64::consts::TAU - d) < 1e-12
     };
+    let xy = |v: &Option<ricochet::log::foxglove::Vector3>| {
+        let v = v.unwrap();
+        assert_eq!(v.z, 0.0);
+        (v.x, v.y)
+    };
     for (tf, s) in tfs.iter().zip(&states) {
         let (q1, q2) = (s.q[0], s.q[1]);
-        let [a, b] = &tf.transforms[..] else {
+        let [a, b, view] = &tf.transforms[..] else {
             panic!("{tf:?}")
         };
-        for f in [a, b] {
-            assert_eq!(f.parent_frame_id, "world");
-            assert_eq!(f.timestamp.as_nanos(), (s.t * 1e9).round() as u64);
-            assert_eq!(f.translation.z, 0.0);
+        for f in [a, b, view] {
+            let time = f.timestamp.unwrap();
+            assert_eq!(time.total_nanos(), (s.t * 1e9).round() as u64);
         }
         assert_eq!(
             (a.child_frame_id.as_str(), b.child_frame_id.as_str()),
             ("body_rodA", "body_rodB")
         );
-        assert!(a.translation.x.abs() < 1e-15 && a.translation.y.abs() < 1e-15);
+        assert_eq!(
+            (a.parent_frame_id.as_str(), b.parent_frame_id.as_str()),
+            ("world", "world")
+        );
+        let (ax, ay) = xy(&a.translation);
+        assert!(ax.abs() < 1e-15 && ay.abs() < 1e-15);
         assert!(
             same_angle(angle(&a.rotation), q1),
             "{} vs {q1}",
             angle(&a.rotation)
         );
-        assert!((b.translation.x - 2.0 * q1.sin()).abs() < 1e-12);
-        assert!((b.translation.y + 2.0 * q1.cos()).abs() < 1e-12);
+        let (bx, by) = xy(&b.translation);
+        assert!((bx - 2.0 * q1.sin()).abs() < 1e-12);
+        assert!((by + 2.0 * q1.cos()).abs() < 1e-12);
         assert!(
             same_angle(angle(&b.rotation), q2),
             "{} vs {q2}",
             angle(&b.rotation)
         );
+        // The view is the root: `view → world`, a translation that keeps the mechanism
+        // (the rods from the pivot to B's tip) within its dead zone.
+        assert_eq!(
+            (view.parent_frame_id.as_str(), view.child_frame_id.as_str()),
+            ("view", "world")
+        );
+        assert_eq!(angle(&view.rotation), 0.0);
+        let (vx, vy) = xy(&view.translation);
+        let (cx, cy) = (-vx, -vy);
+        let tip = (bx + 2.0 * q2.sin(), by - 2.0 * q2.cos());
+        for (px, py) in [(0.0, 0.0), (bx, by), tip] {
+            // Dead zone: 0.75 × the larger half-extent of the box at the start.
+            assert!(
+                (px - cx).abs() <= 2.5 && (py - cy).abs() <= 2.5,
+                "{px}, {py} vs {cx}, {cy}"
+            );
+        }
     }
 }
 
+/// `/log` holds the run's messages and one line per impact, in the order they came.
 #[test]
 fn log_messages_are_what_the_run_reported() {
     for name in SCENES {
         let run = run_scene(name);
-        let logs: Vec<Log> = on_topic(&run.bytes, Topic::Log);
-        assert_eq!(logs.len(), run.seen.messages.len(), "{name}");
-        for (log, (t, level, text)) in logs.iter().zip(&run.seen.messages) {
+        let logs: Vec<Log> = on_protobuf_topic(&run.bytes, Topic::Log);
+        let (lines, others): (Vec<&Log>, Vec<&Log>) =
+            logs.iter().partition(|l| l.message.starts_with("impact #"));
+        assert_eq!(others.len(), run.seen.messages.len(), "{name}");
+        for (log, (t, level, text)) in others.iter().zip(&run.seen.messages) {
             let expected = match level {
                 Level::Info => LogLevel::Info,
                 Level::Warning => LogLevel::Warning,
@@ -572,9 +718,33 @@ fn log_messages_are_what_the_run_reported() {
             };
             assert_eq!(
                 (&log.message, log.level, log.name.as_str()),
-                (text, expected, "ricochet")
+                (text, expected as i32, "ricochet")
             );
-            assert_eq!(log.timestamp.as_nanos(), (t * 1e9).round() as u64);
+            assert_eq!(
+                log.timestamp.unwrap().total_nanos(),
+                (t * 1e9).round() as u64
+            );
+        }
+        // One line per impact, at its time, naming it, its pair, its type and ΔE.
+        let ledger: Vec<ImpactRecord> = on_topic(&run.bytes, Topic::Impacts);
+        assert_eq!(lines.len(), ledger.len(), "{name}");
+        for (line, imp) in lines.iter().zip(&ledger) {
+            assert_eq!(
+                line.timestamp.unwrap().total_nanos(),
+                (imp.t * 1e9).round() as u64
+            );
+            let text = &line.message;
+            let head = format!(
+                "impact #{} {}: {}, {} (case {})",
+                imp.index,
+                imp.pair,
+                imp.law.name(),
+                imp.impact_type.name(),
+                imp.case
+            );
+            assert!(text.starts_with(&head), "{text} vs {head}");
+            let de = ricochet::log::draw::significant(imp.delta_e);
+            assert!(text.ends_with(&format!("ΔE = {de} J")), "{text}");
         }
     }
 }
@@ -754,9 +924,9 @@ fn an_interrupted_run_leaves_a_complete_log() {
     assert_eq!(states[K - 1].t, run.seen.samples[K - 1].0);
     assert_eq!(audit.counters.state_samples, states.len() as u64);
     assert_eq!(log.impacts.len(), run.seen.impacts.len());
-    let last_log: Vec<Log> = on_topic(&run.bytes, Topic::Log);
+    let last_log: Vec<Log> = on_protobuf_topic(&run.bytes, Topic::Log);
     let last_log = last_log.last().unwrap();
-    assert_eq!(last_log.level, LogLevel::Warning);
+    assert_eq!(last_log.level, LogLevel::Warning as i32);
     assert_eq!(
         last_log.message,
         format!("run stopped at t = {t} s: interrupted")
@@ -813,9 +983,9 @@ fn a_failed_run_leaves_a_complete_log() {
     let grid = (t * 100.0).floor() as u64 + 1;
     assert_eq!(log.count(Topic::State), grid + 1);
     assert_eq!(log.count(Topic::State), run.seen.samples.len() as u64);
-    let logs: Vec<Log> = on_topic(&run.bytes, Topic::Log);
+    let logs: Vec<Log> = on_protobuf_topic(&run.bytes, Topic::Log);
     let last_log = logs.last().unwrap();
-    assert_eq!(last_log.level, LogLevel::Error);
+    assert_eq!(last_log.level, LogLevel::Error as i32);
     assert!(last_log.message.contains("failed"), "{}", last_log.message);
 }
 
@@ -916,7 +1086,8 @@ fn a_killed_run_leaves_a_log_readable_up_to_its_last_flush() {
     assert_eq!(read.count(Topic::State), K as u64);
     assert_eq!(read.count(Topic::Tf), K as u64);
     assert_eq!(read.count(Topic::Impacts), impacts as u64);
-    assert_eq!(read.count(Topic::Scene), 1 + impacts as u64);
+    assert_eq!(read.count(Topic::Geometry), 1);
+    assert_eq!(read.count(Topic::Scene), impacts as u64);
     let (t, q, u, e) = &run.seen.samples[K - 1];
     let last = read.last_state.as_ref().unwrap();
     assert_eq!(

@@ -367,7 +367,7 @@ fn mode_changes_reach_the_log_and_the_state_messages() {
         &scene.model,
         (&scene.name, &scene.text),
         (&scene.settings, &overrides),
-        scene.initial.t,
+        &scene.initial,
         sim.scales().gap_tol,
     )
     .unwrap();
@@ -385,7 +385,11 @@ fn mode_changes_reach_the_log_and_the_state_messages() {
     let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
     sim.run(&scene.initial, &mut rec, None);
     assert!(!rec.transitions.is_empty());
-    assert_eq!(read.count(Topic::Log), rec.messages.len() as u64);
+    // The run's messages and one line per impact.
+    assert_eq!(
+        read.count(Topic::Log),
+        (rec.messages.len() + rec.impacts.len()) as u64
+    );
     for tr in &rec.transitions {
         assert!(
             rec.messages

@@ -1,31 +1,46 @@
 //! Drawing the scene for Foxglove's 3-D panel: parry2d shapes as Foxglove primitives in the
 //! plane `z = 0`, body entities, frame transforms and impulse arrows.
 //!
-//! The layout of `/scene` and `/tf`:
-//! - each body is an entity `body/<name>` in its own frame `body_<name>`, with
-//!   `frame_locked: true`, written once; it then moves with the transforms;
-//! - each static obstacle is an entity `world/<name>` in frame `world`;
+//! The layout of `/geometry`, `/scene` and `/tf`:
+//! - `/geometry` holds one `SceneUpdate` that draws everything static or frame-locked, so
+//!   that its latest message, at any time, describes the whole mechanism (a viewer that
+//!   seeks shows, per topic, the latest message before the time it seeks to):
+//!   - each body is an entity `body/<name>` in its own frame `body_<name>`, with
+//!     `frame_locked: true`; it moves with the transforms;
+//!   - a body without a collision shape gets a visual, the entity `visual/<name>`: its
+//!     *skeleton*, a bar from its joint to each joint of its children and to its centre
+//!     of mass, with a disc at the centre of mass ([`skeleton_entity`]), drawn
+//!     translucent so that it is not taken for a shape that collides;
+//!   - each static obstacle is an entity `world/<name>` in frame `world`;
 //! - `/tf` carries, per output sample, one `FrameTransforms` with `world → body_<name>` for
-//!   every body;
-//! - each impact adds an entity `impulse/<index>` in frame `world`: an arrow from the
-//!   contact point along the impulse, shown for a finite lifetime.
+//!   every body and `view → world`, where `view` is a frame that keeps the mechanism in view
+//!   ([`ViewTracker`]), the root of the tree;
+//! - `/scene` carries the impacts: each adds an entity `impulse/<pair>` in frame `world`,
+//!   an arrow from the contact point along the impulse with its magnitude as text, shown
+//!   for a finite lifetime. Successive impacts of a pair replace its arrow, so that an
+//!   accumulation of impacts shows its latest impulse, not a smear of them.
 //!
 //! Solid shapes are slabs of thickness [`DrawStyle::depth`] centred on `z = 0`, so that a
 //! top-down view shows their outline; lines and markers lie just above the slabs.
 
+use parry2d_f64::bounding_volume::Aabb;
 use parry2d_f64::math::{Pose as Pose2, Vector};
 use parry2d_f64::shape::{Shape, TypedShape};
 
 use super::LogError;
 use super::foxglove::{
-    ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
-    FrameTransforms, KeyValuePair, LinePrimitive, LineType, Point3, Pose, Quaternion, SceneEntity,
-    TextPrimitive, Time, TriangleListPrimitive, Vector3,
+    ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, FrameTransform, FrameTransforms,
+    KeyValuePair, LinePrimitive, LineType, Point3, Pose, SceneEntity, TextPrimitive,
+    TriangleListPrimitive, lifetime, planar_pose, planar_transform, point3, rgba, scaled,
+    timestamp, vector3,
 };
 use super::records::ImpactRecord;
 
 /// The fixed frame of the scene.
 pub const WORLD_FRAME: &str = "world";
+
+/// The frame that follows the mechanism ([`ViewTracker`]); a layout's camera follows it.
+pub const VIEW_FRAME: &str = "view";
 
 /// The frame of body `name`: `body_<name>`.
 pub fn body_frame(name: &str) -> String {
@@ -41,8 +56,6 @@ pub struct DrawStyle {
     pub line_width: f64,
     /// Side of the square that stands for a half-space (m).
     pub half_space_size: f64,
-    /// Whether a body entity carries its name as a text label.
-    pub labels: bool,
 }
 
 impl Default for DrawStyle {
@@ -50,8 +63,7 @@ impl Default for DrawStyle {
         Self {
             depth: 0.02,
             line_width: 0.01,
-            half_space_size: 20.0,
-            labels: true,
+            half_space_size: 200.0,
         }
     }
 }
@@ -81,7 +93,7 @@ pub struct ShapeDrawing<'a> {
 /// Ball: a disc (thin cylinder) with a radius line showing its rotation. Capsule: two discs
 /// and a rectangle. Cuboid: a thin box. Convex polygon and triangle: a filled triangle
 /// fan and its outline. Half-space: a large thin box below its boundary line. Segment: a
-/// line; polyline: its segments. Other shapes: [`LogError::UnsupportedShape`].
+/// thin bar and its centre line; polyline: its segments as lines. Other shapes: [`LogError::UnsupportedShape`].
 pub fn add_shape(
     entity: &mut SceneEntity,
     shape: &dyn Shape,
@@ -90,17 +102,17 @@ pub fn add_shape(
     style: &DrawStyle,
 ) -> Result<(), LogError> {
     let slab = |sub: Pose2, size_x: f64, size_y: f64| CubePrimitive {
-        pose: planar(&(*pose * sub)),
-        size: Vector3::new(size_x, size_y, style.depth),
-        color,
+        pose: Some(planar(&(*pose * sub), 0.0)),
+        size: Some(vector3(size_x, size_y, style.depth)),
+        color: Some(color),
     };
-    let outline = |line_type, points: Vec<Point3>| LinePrimitive {
-        line_type,
-        pose: planar(pose),
+    let outline = |line_type: LineType, points: Vec<Point3>| LinePrimitive {
+        r#type: line_type as i32,
+        pose: Some(planar(pose, 0.0)),
         thickness: style.line_width,
         scale_invariant: false,
         points,
-        color: color.scaled(0.5),
+        color: Some(scaled(color, 0.5)),
         colors: vec![],
         indices: vec![],
     };
@@ -110,16 +122,16 @@ pub fn add_shape(
             entity
                 .cylinders
                 .push(disc(pose, Vector::ZERO, ball.radius, color, style));
-            let marker = vec![Point3::new(0.0, 0.0, z), Point3::new(ball.radius, 0.0, z)];
+            let marker = vec![point3(0.0, 0.0, z), point3(ball.radius, 0.0, z)];
             entity.lines.push(outline(LineType::LineStrip, marker));
         }
         TypedShape::Capsule(capsule) => {
             let (a, b, r) = (capsule.segment.a, capsule.segment.b, capsule.radius);
             entity.cylinders.push(disc(pose, a, r, color, style));
             entity.cylinders.push(disc(pose, b, r, color, style));
-            let axis = b - a;
-            let mid = Pose2::new(0.5 * (a + b), axis.y.atan2(axis.x));
-            entity.cubes.push(slab(mid, axis.length(), 2.0 * r));
+            entity
+                .cubes
+                .push(slab(bar(a, b), (b - a).length(), 2.0 * r));
         }
         TypedShape::Cuboid(cuboid) => {
             let h = cuboid.half_extents;
@@ -144,18 +156,20 @@ pub fn add_shape(
             add_polygon(entity, pose, &[tri.a, tri.b, tri.c], color, style);
         }
         TypedShape::Segment(segment) => {
-            let points = vec![point(segment.a, 0.0), point(segment.b, 0.0)];
-            entity.lines.push(LinePrimitive {
-                color,
-                ..outline(LineType::LineStrip, points)
-            });
+            // A bar 3 % of its length wide (at least the line width), so that a rod
+            // drawn as a segment is seen at any zoom, and its centre line.
+            let (a, b) = (segment.a, segment.b);
+            let width = (0.03 * (b - a).length()).max(style.line_width);
+            entity.cubes.push(slab(bar(a, b), (b - a).length(), width));
+            let points = vec![point(a, z), point(b, z)];
+            entity.lines.push(outline(LineType::LineStrip, points));
         }
         TypedShape::Polyline(polyline) => {
             let points = (polyline.segments())
                 .flat_map(|s| [point(s.a, 0.0), point(s.b, 0.0)])
                 .collect();
             entity.lines.push(LinePrimitive {
-                color,
+                color: Some(color),
                 ..outline(LineType::LineList, points)
             });
         }
@@ -176,44 +190,73 @@ pub fn body_entity(
     shapes: &[ShapeDrawing<'_>],
     style: &DrawStyle,
 ) -> Result<SceneEntity, LogError> {
-    let mut entity = entity(
-        t,
-        body_frame(name),
-        format!("body/{name}"),
-        true,
-        shapes,
-        style,
-    )?;
-    entity.metadata.push(key_value("body", name));
-    if style.labels {
-        entity.texts.push(TextPrimitive {
-            pose: Pose::planar(0.0, 0.0, 0.0),
-            billboard: true,
-            font_size: 12.0,
-            scale_invariant: true,
-            color: Color::rgba(1.0, 1.0, 1.0, 1.0),
-            text: name.to_owned(),
-        });
+    let mut entity = entity(t, body_frame(name), format!("body/{name}"), true)?;
+    for s in shapes {
+        add_shape(&mut entity, s.shape, &s.pose, s.color, style)?;
     }
+    entity.metadata.push(key_value("body", name));
     Ok(entity)
 }
 
-/// The entity `world/<name>` in frame `world` (shown until deleted), drawing the static
-/// `shapes` of an obstacle at simulated time `t` (s).
+/// The skeleton of a body: the entity `visual/<name>` in frame `body_<name>`
+/// (frame-locked), a bar from the body's joint (the origin of its frame) to each point of
+/// `anchors` (the joints of its children) and to its centre of mass `com` (in the body
+/// frame, m), in `color` made translucent, and, if `com_disc`, a disc at `com`. The bars
+/// are `0.05 L` wide and the disc's radius `0.06 L`, with `L` the longest bar (at least
+/// 0.1 m). It is the visual of a body without a collision shape, and shows the link of a
+/// hinged body whose shapes do not reach its joint (a pendulum's bob).
+pub fn skeleton_entity(
+    t: f64,
+    name: &str,
+    anchors: &[Vector],
+    (com, com_disc): (Vector, bool),
+    color: Color,
+    style: &DrawStyle,
+) -> Result<SceneEntity, LogError> {
+    let mut entity = entity(t, body_frame(name), format!("visual/{name}"), true)?;
+    let color = Color { a: 0.6, ..color };
+    let longest = (anchors.iter().chain([&com]))
+        .map(|p| p.length())
+        .fold(0.1, f64::max);
+    let width = 0.05 * longest;
+    for &p in anchors.iter().chain([&com]) {
+        if p.length() > 0.0 {
+            entity.cubes.push(CubePrimitive {
+                pose: Some(planar(&bar(Vector::ZERO, p), 0.0)),
+                size: Some(vector3(p.length(), width, 0.5 * style.depth)),
+                color: Some(color),
+            });
+        }
+    }
+    if com_disc {
+        entity.cylinders.push(disc(
+            &Pose2::IDENTITY,
+            com,
+            0.06 * longest,
+            scaled(color, 0.7),
+            style,
+        ));
+    }
+    entity.metadata.push(key_value("visual", name));
+    Ok(entity)
+}
+
+/// The entity `world/<name>` in frame `world` (frame-locked, shown until deleted), drawing
+/// the static `shapes` of an obstacle at simulated time `t` (s).
+///
+/// Entities in `world` are frame-locked too: a viewer keeps an entity that is not in the
+/// *fixed* frame, the root of the transform tree, which is `view` (see
+/// [`ViewTracker::transform`]).
 pub fn obstacle_entity(
     t: f64,
     name: &str,
     shapes: &[ShapeDrawing<'_>],
     style: &DrawStyle,
 ) -> Result<SceneEntity, LogError> {
-    let mut entity = entity(
-        t,
-        WORLD_FRAME.into(),
-        format!("world/{name}"),
-        false,
-        shapes,
-        style,
-    )?;
+    let mut entity = entity(t, WORLD_FRAME.into(), format!("world/{name}"), true)?;
+    for s in shapes {
+        add_shape(&mut entity, s.shape, &s.pose, s.color, style)?;
+    }
     entity.metadata.push(key_value("obstacle", name));
     Ok(entity)
 }
@@ -222,7 +265,7 @@ pub fn obstacle_entity(
 /// (m, rad) in the world frame.
 pub fn body_transform(t: f64, name: &str, pose: &Pose2) -> Result<FrameTransform, LogError> {
     let (x, y) = (pose.translation.x, pose.translation.y);
-    FrameTransform::planar(
+    planar_transform(
         t,
         WORLD_FRAME,
         &body_frame(name),
@@ -241,63 +284,194 @@ pub fn body_transforms<'a>(
     Ok(FrameTransforms { transforms })
 }
 
+/// Keeps the mechanism in view: the origin of the frame `view`, which a camera follows.
+///
+/// It starts at the centre of the mechanism's bounding box and stays still while the box
+/// lies within the *dead zone*, a square of half-side `margin` about it; when the box
+/// leaves it, the centre moves just enough to hold it again (per axis). A pendulum's
+/// swing thus leaves the camera still, and a wheel rolling away is followed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewTracker {
+    /// The origin of `view` in the world (m).
+    pub center: Vector,
+    /// Half-side of the dead zone (m).
+    pub margin: f64,
+}
+
+impl ViewTracker {
+    /// A tracker for a mechanism whose bounding box is `aabb` at the start: centred on it,
+    /// with a dead zone of half-side `max(0.75 × the larger half-extent, 0.25 m)`.
+    pub fn new(aabb: &Aabb) -> ViewTracker {
+        let half = 0.5 * (aabb.maxs - aabb.mins);
+        ViewTracker {
+            center: 0.5 * (aabb.mins + aabb.maxs),
+            margin: (0.75 * half.x.max(half.y)).max(0.25),
+        }
+    }
+
+    /// Moves the centre so that `aabb` lies in the dead zone (per axis; a box larger than
+    /// the zone is centred), and returns it (m).
+    pub fn follow(&mut self, aabb: &Aabb) -> Vector {
+        let axis = |c: f64, lo: f64, hi: f64| {
+            if hi - lo > 2.0 * self.margin {
+                0.5 * (lo + hi)
+            } else {
+                c.clamp(hi - self.margin, lo + self.margin)
+            }
+        };
+        self.center = Vector::new(
+            axis(self.center.x, aabb.mins.x, aabb.maxs.x),
+            axis(self.center.y, aabb.mins.y, aabb.maxs.y),
+        );
+        self.center
+    }
+
+    /// The transform `view → world` at simulated time `t` (s): the world seen from the view,
+    /// a translation by `−center`.
+    ///
+    /// The view is the *root* of the transform tree, so that a viewer that picks its
+    /// display frame by itself (Foxglove takes the root with the most frames when no
+    /// layout says otherwise) keeps the mechanism in view; a layout follows `view`.
+    pub fn transform(&self, t: f64) -> Result<FrameTransform, LogError> {
+        planar_transform(
+            t,
+            VIEW_FRAME,
+            WORLD_FRAME,
+            (-self.center.x, -self.center.y, 0.0),
+        )
+    }
+}
+
 /// How impulse arrows are drawn.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArrowStyle {
-    /// Length of the arrow per unit impulse (m per N·s).
-    pub scale: f64,
+    /// Length of the arrow of the largest impulse so far (m).
+    pub length: f64,
+    /// Shortest arrow, as a fraction of `length`, so that a tiny impulse is still seen.
+    pub min_fraction: f64,
     /// How long the arrow stays after the impact, in simulated time (s).
     pub lifetime: f64,
-    /// Diameter of the shaft (m); the head is twice as wide.
-    pub shaft_diameter: f64,
     /// Height of the arrow above the plane, so that it is not hidden in a slab (m).
     pub elevation: f64,
     /// Colour.
     pub color: Color,
 }
 
-impl Default for ArrowStyle {
-    fn default() -> Self {
-        Self {
-            scale: 0.1,
-            lifetime: 0.25,
-            shaft_diameter: 0.01,
-            elevation: 0.05,
-            color: Color::rgba(1.0, 0.2, 0.1, 1.0),
+impl ArrowStyle {
+    /// Arrows for a mechanism of size `size` (m, the larger side of its bounding box): the
+    /// largest impulse is drawn `0.4 size` long (at least 0.1 m), the smallest `0.2` of that.
+    pub fn for_size(size: f64) -> ArrowStyle {
+        ArrowStyle {
+            length: (0.4 * size).max(0.1),
+            ..ArrowStyle::default()
         }
     }
 }
 
-/// The entity `impulse/<index>` in frame `world`: an arrow from the contact point along
-/// the impulse `I_n n + I_t t`, of length `scale·|I|`, shown for `lifetime` after the
-/// impact. Its metadata carries the pair, `I_n` and `I_t`.
-pub fn impulse_arrow(impact: &ImpactRecord, style: &ArrowStyle) -> Result<SceneEntity, LogError> {
+impl Default for ArrowStyle {
+    fn default() -> Self {
+        Self {
+            length: 0.5,
+            min_fraction: 0.2,
+            lifetime: 0.25,
+            elevation: 0.05,
+            color: rgba(1.0, 0.2, 0.1, 1.0),
+        }
+    }
+}
+
+/// The length of impulse arrows: proportional to the impulse, the largest impulse so far
+/// drawn [`ArrowStyle::length`] long, with a floor of [`ArrowStyle::min_fraction`] of it.
+///
+/// A log is written as the run goes, so the run's largest impulse is not known in
+/// advance; scaling to the largest so far keeps every arrow legible (the first impact of
+/// most runs is their largest) and the text beside each arrow gives its value.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ArrowScale {
+    /// The largest impulse magnitude so far (N·s).
+    pub largest: f64,
+}
+
+impl ArrowScale {
+    /// The length (m) of the arrow of an impulse of magnitude `impulse` (N·s), which
+    /// becomes the largest so far if it is.
+    pub fn length(&mut self, impulse: f64, style: &ArrowStyle) -> f64 {
+        self.largest = self.largest.max(impulse);
+        let fraction = if self.largest > 0.0 {
+            impulse / self.largest
+        } else {
+            0.0
+        };
+        style.length * fraction.max(style.min_fraction)
+    }
+}
+
+/// The entity `impulse/<pair>` in frame `world`: an arrow `length` long (m) from the
+/// contact point along the impulse `I_n n + I_t t`, and the magnitude `|I|` as text at its
+/// tip, shown for `style.lifetime` after the impact; the next impact of the pair replaces
+/// it. Its metadata carries the impact's index, the pair, `I_n` and `I_t`.
+pub fn impulse_arrow(
+    impact: &ImpactRecord,
+    length: f64,
+    style: &ArrowStyle,
+) -> Result<SceneEntity, LogError> {
     let impulse = impact.impulse();
-    let length = style.scale * impulse.x.hypot(impulse.y);
-    let mut pose = Pose::planar(impact.point.x, impact.point.y, impulse.y.atan2(impulse.x));
-    pose.position.z = style.elevation;
+    let angle = impulse.y.atan2(impulse.x);
+    let (p, z) = (impact.point, style.elevation);
+    let shaft_diameter = 0.06 * style.length;
     let arrow = ArrowPrimitive {
-        pose,
-        shaft_length: 0.75 * length,
-        shaft_diameter: style.shaft_diameter,
-        head_length: 0.25 * length,
-        head_diameter: 2.0 * style.shaft_diameter,
-        color: style.color,
+        pose: Some(planar_pose(p.x, p.y, angle, z)),
+        shaft_length: 0.7 * length,
+        shaft_diameter,
+        head_length: 0.3 * length,
+        head_diameter: 2.5 * shaft_diameter,
+        color: Some(style.color),
+    };
+    let tip = length + 0.05 * style.length;
+    let text = TextPrimitive {
+        pose: Some(planar_pose(
+            p.x + tip * angle.cos(),
+            p.y + tip * angle.sin(),
+            0.0,
+            z,
+        )),
+        billboard: true,
+        font_size: 14.0,
+        scale_invariant: true,
+        color: Some(rgba(1.0, 1.0, 1.0, 1.0)),
+        text: format!("{} N·s", significant(impulse.x.hypot(impulse.y))),
     };
     Ok(SceneEntity {
-        timestamp: Time::from_seconds(impact.t)?,
+        timestamp: Some(timestamp(impact.t)?),
         frame_id: WORLD_FRAME.to_owned(),
-        id: format!("impulse/{}", impact.index),
-        lifetime: Duration::from_seconds(style.lifetime)?,
-        frame_locked: false,
+        id: format!("impulse/{}", impact.pair),
+        lifetime: Some(lifetime(style.lifetime)?),
+        frame_locked: true,
         metadata: vec![
+            key_value("impact", &impact.index.to_string()),
             key_value("pair", &impact.pair),
             key_value("i_n", &impact.i_n.to_string()),
             key_value("i_t", &impact.i_t.to_string()),
         ],
         arrows: vec![arrow],
+        texts: vec![text],
         ..SceneEntity::default()
     })
+}
+
+/// `x` with three significant digits: `1.02`, `0.0451`, `3.20e-7`.
+pub fn significant(x: f64) -> String {
+    let a = x.abs();
+    if a != 0.0 && !(1e-3..1e4).contains(&a) {
+        format!("{x:.2e}")
+    } else {
+        let digits = if a == 0.0 {
+            2
+        } else {
+            (2 - a.log10().floor() as i32).max(0) as usize
+        };
+        format!("{x:.digits$}")
+    }
 }
 
 fn entity(
@@ -305,21 +479,22 @@ fn entity(
     frame_id: String,
     id: String,
     frame_locked: bool,
-    shapes: &[ShapeDrawing<'_>],
-    style: &DrawStyle,
 ) -> Result<SceneEntity, LogError> {
-    let mut entity = SceneEntity {
-        timestamp: Time::from_seconds(t)?,
+    Ok(SceneEntity {
+        timestamp: Some(timestamp(t)?),
         frame_id,
         id,
-        lifetime: Duration::FOREVER,
+        // Zero: shown until replaced or deleted.
+        lifetime: Some(lifetime(0.0)?),
         frame_locked,
         ..SceneEntity::default()
-    };
-    for s in shapes {
-        add_shape(&mut entity, s.shape, &s.pose, s.color, style)?;
-    }
-    Ok(entity)
+    })
+}
+
+/// The pose of a bar from `a` to `b`: centred between them, its x axis along `b − a`.
+fn bar(a: Vector, b: Vector) -> Pose2 {
+    let axis = b - a;
+    Pose2::new(0.5 * (a + b), axis.y.atan2(axis.x))
 }
 
 /// A disc of radius `r` (m) centred at `center` in the shape frame `pose`.
@@ -331,11 +506,11 @@ fn disc(
     style: &DrawStyle,
 ) -> CylinderPrimitive {
     CylinderPrimitive {
-        pose: planar(&(*pose * Pose2::from_translation(center))),
-        size: Vector3::new(2.0 * r, 2.0 * r, style.depth),
+        pose: Some(planar(&(*pose * Pose2::from_translation(center)), 0.0)),
+        size: Some(vector3(2.0 * r, 2.0 * r, style.depth)),
         bottom_scale: 1.0,
         top_scale: 1.0,
-        color,
+        color: Some(color),
     }
 }
 
@@ -353,34 +528,36 @@ fn add_polygon(
         .map(|p| point(p, 0.0))
         .collect();
     entity.triangles.push(TriangleListPrimitive {
-        pose: planar(pose),
+        pose: Some(planar(pose, 0.0)),
         points: fan,
-        color,
+        color: Some(color),
         colors: vec![],
         indices: vec![],
     });
     entity.lines.push(LinePrimitive {
-        line_type: LineType::LineLoop,
-        pose: planar(pose),
+        r#type: LineType::LineLoop as i32,
+        pose: Some(planar(pose, 0.0)),
         thickness: style.line_width,
         scale_invariant: false,
         points: points.iter().map(|&p| point(p, style.line_z())).collect(),
-        color: color.scaled(0.5),
+        color: Some(scaled(color, 0.5)),
         colors: vec![],
         indices: vec![],
     });
 }
 
-/// The Foxglove pose of a planar pose: position `(x, y, 0)`, rotation about z.
-fn planar(pose: &Pose2) -> Pose {
-    Pose {
-        position: Vector3::new(pose.translation.x, pose.translation.y, 0.0),
-        orientation: Quaternion::about_z(pose.rotation.angle()),
-    }
+/// The Foxglove pose of a planar pose at height `z`: position `(x, y, z)`, rotation about z.
+fn planar(pose: &Pose2, z: f64) -> Pose {
+    planar_pose(
+        pose.translation.x,
+        pose.translation.y,
+        pose.rotation.angle(),
+        z,
+    )
 }
 
 fn point(p: Vector, z: f64) -> Point3 {
-    Point3::new(p.x, p.y, z)
+    point3(p.x, p.y, z)
 }
 
 fn key_value(key: &str, value: &str) -> KeyValuePair {
@@ -395,8 +572,9 @@ mod tests {
     use parry2d_f64::shape::{Ball, Capsule, ConvexPolygon, Cuboid, HalfSpace, RoundShape};
 
     use super::*;
+    use crate::log::foxglove::Quaternion;
 
-    const RED: Color = Color::rgba(1.0, 0.0, 0.0, 1.0);
+    const RED: Color = rgba(1.0, 0.0, 0.0, 1.0);
 
     fn drawn(shape: &dyn Shape, pose: Pose2) -> SceneEntity {
         let mut e = SceneEntity::default();
@@ -405,17 +583,30 @@ mod tests {
     }
 
     /// The angle of a z-rotation quaternion (rad).
-    fn angle(q: Quaternion) -> f64 {
+    fn angle(q: Option<Quaternion>) -> f64 {
+        let q = q.unwrap();
         2.0 * q.z.atan2(q.w)
+    }
+
+    /// `(x, y)` of a pose's position.
+    fn xy(pose: &Option<Pose>) -> (f64, f64) {
+        let p = pose.unwrap().position.unwrap();
+        (p.x, p.y)
+    }
+
+    /// `(x, y)` of a size.
+    fn size(size: &Option<crate::log::foxglove::Vector3>) -> (f64, f64) {
+        let s = size.unwrap();
+        (s.x, s.y)
     }
 
     #[test]
     fn ball_is_a_disc_at_the_composed_pose() {
         let e = drawn(&Ball::new(0.5), Pose2::new(Vector::new(1.0, 2.0), 0.3));
         let c = &e.cylinders[0];
-        assert_eq!((c.size.x, c.size.y), (1.0, 1.0));
-        assert_eq!((c.pose.position.x, c.pose.position.y), (1.0, 2.0));
-        assert!((angle(c.pose.orientation) - 0.3).abs() < 1e-15);
+        assert_eq!(size(&c.size), (1.0, 1.0));
+        assert_eq!(xy(&c.pose), (1.0, 2.0));
+        assert!((angle(c.pose.unwrap().orientation) - 0.3).abs() < 1e-15);
         // The radius marker goes from the centre to the rim along the local x axis.
         assert_eq!(e.lines[0].points[1].x, 0.5);
     }
@@ -425,27 +616,25 @@ mod tests {
         // A vertical capsule (half height 1) turned by 90°: its ends are at x = ∓1.
         let pose = Pose2::new(Vector::new(0.0, 3.0), std::f64::consts::FRAC_PI_2);
         let e = drawn(&Capsule::new_y(1.0, 0.25), pose);
-        let ends: Vec<(f64, f64)> = (e.cylinders.iter())
-            .map(|c| (c.pose.position.x, c.pose.position.y))
-            .collect();
+        let ends: Vec<(f64, f64)> = e.cylinders.iter().map(|c| xy(&c.pose)).collect();
         assert!((ends[0].0 - 1.0).abs() < 1e-15 && (ends[0].1 - 3.0).abs() < 1e-15);
         assert!((ends[1].0 + 1.0).abs() < 1e-15 && (ends[1].1 - 3.0).abs() < 1e-15);
         // The rectangle spans the segment (length 2) and the diameter (0.5).
-        assert_eq!((e.cubes[0].size.x, e.cubes[0].size.y), (2.0, 0.5));
+        assert_eq!(size(&e.cubes[0].size), (2.0, 0.5));
     }
 
     #[test]
     fn half_space_lies_on_the_solid_side() {
         // Ground y ≤ 0: the square is centred straight below the origin, unrotated.
-        let size = DrawStyle::default().half_space_size;
+        let side = DrawStyle::default().half_space_size;
         let e = drawn(&HalfSpace::new(Vector::Y), Pose2::IDENTITY);
         let cube = &e.cubes[0];
-        assert!(cube.pose.position.x.abs() < 1e-12);
-        assert_eq!(cube.pose.position.y, -0.5 * size);
-        assert!(angle(cube.pose.orientation).abs() < 1e-15);
+        assert!(xy(&cube.pose).0.abs() < 1e-12);
+        assert_eq!(xy(&cube.pose).1, -0.5 * side);
+        assert!(angle(cube.pose.unwrap().orientation).abs() < 1e-15);
         // A wall x ≥ 0 solid (outward normal −x): centred at +x.
         let e = drawn(&HalfSpace::new(-Vector::X), Pose2::IDENTITY);
-        assert_eq!(e.cubes[0].pose.position.x, 0.5 * size);
+        assert_eq!(xy(&e.cubes[0].pose).0, 0.5 * side);
     }
 
     #[test]
@@ -461,8 +650,8 @@ mod tests {
         let e = drawn(&poly, Pose2::IDENTITY);
         assert_eq!(e.triangles[0].points.len(), 6);
         assert_eq!(e.lines[0].points.len(), 4);
-        assert_eq!(e.lines[0].line_type, LineType::LineLoop);
-        assert_eq!(drawn(&square, Pose2::IDENTITY).cubes[0].size.x, 2.0);
+        assert_eq!(e.lines[0].r#type, LineType::LineLoop as i32);
+        assert_eq!(size(&drawn(&square, Pose2::IDENTITY).cubes[0].size).0, 2.0);
     }
 
     #[test]
@@ -481,12 +670,97 @@ mod tests {
         let tf = body_transform(0.5, "rod", &Pose2::new(Vector::new(1.0, -2.0), 1.2)).unwrap();
         assert_eq!(tf.child_frame_id, "body_rod");
         assert_eq!(tf.parent_frame_id, "world");
+        let (p, r) = (tf.translation.unwrap(), tf.rotation.unwrap());
+        assert_eq!((p.x, p.y, p.z), (1.0, -2.0, 0.0));
+        assert_eq!((r.x, r.y), (0.0, 0.0));
+        assert!((r.z - 0.6f64.sin()).abs() < 1e-15);
+        assert!((r.w - 0.6f64.cos()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn skeleton_bars_reach_the_children_and_the_centre_of_mass() {
+        // Kane's rod A: hinged at its origin, rod B at (0, −2), centre of mass (0, −1).
+        let e = skeleton_entity(
+            0.0,
+            "rodA",
+            &[Vector::new(0.0, -2.0)],
+            (Vector::new(0.0, -1.0), true),
+            RED,
+            &DrawStyle::default(),
+        )
+        .unwrap();
         assert_eq!(
-            (tf.translation.x, tf.translation.y, tf.translation.z),
-            (1.0, -2.0, 0.0)
+            (e.id.as_str(), e.frame_id.as_str()),
+            ("visual/rodA", "body_rodA")
         );
-        assert_eq!((tf.rotation.x, tf.rotation.y), (0.0, 0.0));
-        assert!((tf.rotation.z - 0.6f64.sin()).abs() < 1e-15);
-        assert!((tf.rotation.w - 0.6f64.cos()).abs() < 1e-15);
+        assert!(e.frame_locked);
+        // Each bar is centred halfway to its end, along it, and as long as it.
+        let bars: Vec<((f64, f64), (f64, f64))> = e
+            .cubes
+            .iter()
+            .map(|c| (xy(&c.pose), size(&c.size)))
+            .collect();
+        assert_eq!(bars[0].0, (0.0, -1.0));
+        assert_eq!(bars[0].1, (2.0, 0.1));
+        assert_eq!(bars[1].0, (0.0, -0.5));
+        assert_eq!(bars[1].1.0, 1.0);
+        assert!(
+            (angle(e.cubes[0].pose.unwrap().orientation) + std::f64::consts::FRAC_PI_2).abs()
+                < 1e-15
+        );
+        // The disc at the centre of mass.
+        assert_eq!(xy(&e.cylinders[0].pose), (0.0, -1.0));
+        assert!(
+            e.cubes.iter().all(|c| c.color.unwrap().a < 1.0),
+            "translucent"
+        );
+    }
+
+    #[test]
+    fn view_stays_while_the_mechanism_is_in_its_dead_zone_and_follows_it_out() {
+        let aabb = |x0: f64, y0: f64, x1: f64, y1: f64| {
+            Aabb::new(Vector::new(x0, y0), Vector::new(x1, y1))
+        };
+        let mut view = ViewTracker::new(&aabb(-1.0, -2.0, 1.0, 0.0));
+        assert_eq!(view.center, Vector::new(0.0, -1.0));
+        assert_eq!(view.margin, 0.75);
+        // A swing within the zone: no motion.
+        assert_eq!(
+            view.follow(&aabb(-0.7, -1.5, 0.5, -0.3)),
+            Vector::new(0.0, -1.0)
+        );
+        // The box leaves on the right by 0.5: the centre moves by 0.5 along x only.
+        assert_eq!(
+            view.follow(&aabb(0.0, -1.5, 1.25, -0.5)),
+            Vector::new(0.5, -1.0)
+        );
+        // A box larger than the zone is centred.
+        assert_eq!(
+            view.follow(&aabb(-5.0, -1.5, 5.0, -0.5)),
+            Vector::new(0.0, -1.0)
+        );
+    }
+
+    #[test]
+    fn arrows_scale_to_the_largest_impulse_so_far_with_a_floor() {
+        let style = ArrowStyle::for_size(2.0);
+        assert_eq!(style.length, 0.8);
+        let mut scale = ArrowScale::default();
+        assert_eq!(scale.length(2.0, &style), 0.8);
+        assert_eq!(scale.length(1.0, &style), 0.4);
+        // 1e-4 of the largest: the floor, 0.2 of the full length.
+        assert!((scale.length(2e-4, &style) - 0.16).abs() < 1e-15);
+        // A new largest impulse takes the full length.
+        assert_eq!(scale.length(4.0, &style), 0.8);
+        assert_eq!(scale.largest, 4.0);
+    }
+
+    #[test]
+    fn significant_keeps_three_digits() {
+        assert_eq!(significant(1.0242), "1.02");
+        assert_eq!(significant(0.045_12), "0.0451");
+        assert_eq!(significant(123.4), "123");
+        assert_eq!(significant(3.2e-7), "3.20e-7");
+        assert_eq!(significant(0.0), "0.00");
     }
 }

@@ -1,70 +1,37 @@
-//! Foxglove message types, mirrored field for field from the official JSON schemas shipped in
-//! `schemas/foxglove/` (npm `@foxglove/schemas` 2.1.0, MIT).
+//! Foxglove's well-known message types, from Foxglove's own crate (`foxglove`, the
+//! Foxglove SDK, MIT), and the few helpers ricochet needs to fill them from planar
+//! quantities.
 //!
-//! Foxglove's schemas mark every field as required, so every struct here serializes every
-//! field, and the primitive lists of a [`SceneEntity`] are emitted even when empty. Enums
-//! that the schemas encode as integers (`LineType`, `LogLevel`, `SceneEntityDeletionType`)
-//! serialize as those integers.
+//! The types are the SDK's protobuf messages (prost); the log writes them
+//! protobuf-encoded, with the schema (a `FileDescriptorSet`) the SDK gives for each, as
+//! the SDK's own writer does. Nested messages are `Option`s in protobuf; the helpers here
+//! always fill them.
 //!
 //! Units: lengths in metres, angles through unit quaternions, colours as RGBA in `0..=1`,
-//! times as [`Time`] `{sec, nsec}` of *simulated* time since `t = 0`.
+//! times as [`Timestamp`] `{sec, nsec}` of *simulated* time since `t = 0` (which a viewer
+//! shows as seconds after 1970-01-01).
 
-use serde::{Deserialize, Serialize};
+pub use foxglove::messages::line_primitive::Type as LineType;
+pub use foxglove::messages::log::Level as LogLevel;
+pub use foxglove::messages::{
+    ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, Duration, FrameTransform,
+    FrameTransforms, KeyValuePair, LinePrimitive, Log, Point3, Pose, Quaternion, SceneEntity,
+    SceneEntityDeletion, SceneUpdate, TextPrimitive, Timestamp, TriangleListPrimitive, Vector3,
+};
+pub use foxglove::{Decode, Encode};
 
 use super::LogError;
 
 /// One second in nanoseconds.
 const NS_PER_S: u64 = 1_000_000_000;
 
-/// A point in time (`foxglove.Time`, schema title `time`): whole seconds and nanoseconds
-/// since the epoch. ricochet's epoch is the start of the simulation, `t = 0`.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
-)]
-pub struct Time {
-    /// Whole seconds (s).
-    pub sec: u32,
-    /// Nanoseconds past `sec`, in `0..1_000_000_000` (ns).
-    pub nsec: u32,
-}
-
-impl Time {
-    /// The time `t` (s) rounded to the nearest nanosecond.
-    ///
-    /// Errors with [`LogError::InvalidTime`] when `t` is negative, NaN or infinite, or not
-    /// below `2³²` s (the range of `sec`). `−0.0` is taken as `0`.
-    pub fn from_seconds(t: f64) -> Result<Time, LogError> {
-        let ns = nanoseconds(t)?;
-        Ok(Time::from_nanos(ns))
-    }
-
-    /// The time `ns` nanoseconds after the epoch. `ns` must be below `2³²` s for `sec` to
-    /// hold it; [`nanoseconds`] guarantees that.
-    fn from_nanos(ns: u64) -> Time {
-        Time {
-            sec: u32::try_from(ns / NS_PER_S).unwrap_or(u32::MAX),
-            nsec: (ns % NS_PER_S) as u32,
-        }
-    }
-
-    /// This time in nanoseconds since the epoch.
-    pub fn as_nanos(self) -> u64 {
-        u64::from(self.sec) * NS_PER_S + u64::from(self.nsec)
-    }
-
-    /// This time in seconds since the epoch (s).
-    pub fn as_seconds(self) -> f64 {
-        f64::from(self.sec) + f64::from(self.nsec) / 1e9
-    }
-}
-
 /// The simulated time `t` (s) in whole nanoseconds, as MCAP `log_time` / `publish_time`.
 ///
 /// Rounds to the nearest nanosecond. Rejects (with [`LogError::InvalidTime`]) a `t` that is
-/// negative, NaN or infinite, or not below `2³²` s, the range of a Foxglove [`Time`]
+/// negative, NaN or infinite, or not below `2³²` s, the range of a Foxglove [`Timestamp`]
 /// (about 136 years). `−0.0` is taken as `0`.
 pub fn nanoseconds(t: f64) -> Result<u64, LogError> {
-    // `u32::MAX + 1` seconds: the first time that `Time::sec` cannot hold.
+    // `u32::MAX + 1` seconds: the first time that `Timestamp::sec` cannot hold.
     const LIMIT_S: f64 = 4_294_967_296.0;
     // NaN and ±∞ fall outside the range; −0.0 is inside.
     if !(0.0..LIMIT_S).contains(&t) {
@@ -79,520 +46,263 @@ pub fn nanoseconds(t: f64) -> Result<u64, LogError> {
     Ok(ns)
 }
 
-/// A signed span of time (`foxglove.Duration`, schema title `duration`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub struct Duration {
-    /// Whole seconds, may be negative (s).
-    pub sec: i32,
-    /// Nanoseconds in the positive direction, in `0..1_000_000_000` (ns).
-    pub nsec: u32,
+/// The simulated time `t` (s) as a Foxglove [`Timestamp`], rounded to the nearest
+/// nanosecond; the checks of [`nanoseconds`].
+pub fn timestamp(t: f64) -> Result<Timestamp, LogError> {
+    let ns = nanoseconds(t)?;
+    // `nanoseconds` keeps `ns / 10⁹` within u32.
+    let sec = u32::try_from(ns / NS_PER_S).map_err(|_| LogError::InvalidTime { t })?;
+    Ok(Timestamp::new(sec, (ns % NS_PER_S) as u32))
 }
 
-impl Duration {
-    /// The zero duration. As a [`SceneEntity::lifetime`] it means "until deleted".
-    pub const FOREVER: Duration = Duration { sec: 0, nsec: 0 };
-
-    /// The non-negative duration `d` (s), rounded to the nearest nanosecond; the same
-    /// checks as [`Time::from_seconds`].
-    pub fn from_seconds(d: f64) -> Result<Duration, LogError> {
-        let t = Time::from_seconds(d)?;
-        Ok(Duration {
-            // `Time::sec` may exceed `i32::MAX`; such lifetimes are clamped (~68 years).
-            sec: i32::try_from(t.sec).unwrap_or(i32::MAX),
-            nsec: t.nsec,
-        })
-    }
+/// A [`Timestamp`] in seconds (s).
+pub fn seconds(time: &Timestamp) -> f64 {
+    f64::from(time.sec()) + f64::from(time.nsec()) / 1e9
 }
 
-/// A 3-vector (`foxglove.Vector3`): a translation or a size (m).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Vector3 {
-    /// x component (m).
-    pub x: f64,
-    /// y component (m).
-    pub y: f64,
-    /// z component (m).
-    pub z: f64,
+/// The non-negative duration `d` (s) as an entity lifetime, rounded to the nearest
+/// nanosecond (the checks of [`nanoseconds`]; lifetimes beyond `i32::MAX` s are clamped).
+/// A zero lifetime means "until replaced or deleted".
+pub fn lifetime(d: f64) -> Result<Duration, LogError> {
+    let t = timestamp(d)?;
+    Ok(Duration::new(
+        i32::try_from(t.sec()).unwrap_or(i32::MAX),
+        t.nsec(),
+    ))
 }
 
-impl Vector3 {
-    /// The vector `(x, y, z)`.
-    pub const fn new(x: f64, y: f64, z: f64) -> Self {
-        Self { x, y, z }
-    }
-}
-
-/// A point (`foxglove.Point3`) in the frame of the primitive that holds it (m).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Point3 {
-    /// x coordinate (m).
-    pub x: f64,
-    /// y coordinate (m).
-    pub y: f64,
-    /// z coordinate (m).
-    pub z: f64,
-}
-
-impl Point3 {
-    /// The point `(x, y, z)`.
-    pub const fn new(x: f64, y: f64, z: f64) -> Self {
-        Self { x, y, z }
-    }
-}
-
-/// A rotation as a unit quaternion `(x, y, z, w)` (`foxglove.Quaternion`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Quaternion {
-    /// x component.
-    pub x: f64,
-    /// y component.
-    pub y: f64,
-    /// z component.
-    pub z: f64,
-    /// w (scalar) component.
-    pub w: f64,
-}
-
-impl Quaternion {
-    /// The identity rotation.
-    pub const IDENTITY: Quaternion = Quaternion {
+/// The rotation by `theta` (rad, counter-clockwise seen from +z) about the z axis:
+/// `(0, 0, sin θ/2, cos θ/2)`.
+pub fn about_z(theta: f64) -> Quaternion {
+    let (s, c) = (0.5 * theta).sin_cos();
+    Quaternion {
         x: 0.0,
         y: 0.0,
-        z: 0.0,
-        w: 1.0,
-    };
+        z: s,
+        w: c,
+    }
+}
 
-    /// The rotation by `theta` (rad, counter-clockwise seen from +z) about the z axis:
-    /// `(0, 0, sin θ/2, cos θ/2)`.
-    pub fn about_z(theta: f64) -> Quaternion {
-        let (s, c) = (0.5 * theta).sin_cos();
-        Quaternion {
-            x: 0.0,
-            y: 0.0,
-            z: s,
-            w: c,
+/// The 3-vector `(x, y, z)` (m).
+pub fn vector3(x: f64, y: f64, z: f64) -> Vector3 {
+    Vector3 { x, y, z }
+}
+
+/// The point `(x, y, z)` (m).
+pub fn point3(x: f64, y: f64, z: f64) -> Point3 {
+    Point3 { x, y, z }
+}
+
+/// The planar pose `(x, y, θ)` lifted to the height `z`: position `(x, y, z)` (m), rotation
+/// `θ` (rad) about z.
+pub fn planar_pose(x: f64, y: f64, theta: f64, z: f64) -> Pose {
+    Pose {
+        position: Some(vector3(x, y, z)),
+        orientation: Some(about_z(theta)),
+    }
+}
+
+/// The colour `(r, g, b, a)`, each in `0..=1`.
+pub const fn rgba(r: f64, g: f64, b: f64, a: f64) -> Color {
+    Color { r, g, b, a }
+}
+
+/// `color` with each of r, g, b multiplied by `factor` (clamped to `0..=1`).
+pub fn scaled(color: Color, factor: f64) -> Color {
+    let f = |c: f64| (c * factor).clamp(0.0, 1.0);
+    rgba(f(color.r), f(color.g), f(color.b), color.a)
+}
+
+/// The planar transform `parent → child` at simulated time `t` (s): the child origin at
+/// `(x, y, 0)` (m) of the parent, rotated by `theta` (rad) about z.
+pub fn planar_transform(
+    t: f64,
+    parent: &str,
+    child: &str,
+    (x, y, theta): (f64, f64, f64),
+) -> Result<FrameTransform, LogError> {
+    Ok(FrameTransform {
+        timestamp: Some(timestamp(t)?),
+        parent_frame_id: parent.to_owned(),
+        child_frame_id: child.to_owned(),
+        translation: Some(vector3(x, y, 0.0)),
+        rotation: Some(about_z(theta)),
+    })
+}
+
+/// Appends `message`, protobuf-encoded as the Foxglove SDK encodes it, to `buffer`; on an
+/// error `buffer` is left as it was.
+pub fn append_protobuf<M: Encode>(
+    buffer: &mut Vec<u8>,
+    what: &'static str,
+    message: &M,
+) -> Result<(), LogError> {
+    let start = buffer.len();
+    message.encode(buffer).map_err(|e| {
+        buffer.truncate(start);
+        LogError::Protobuf {
+            what,
+            message: e.to_string(),
+        }
+    })
+}
+
+/// Collects the first non-finite number of a message, with its path
+/// (`entities[0].cubes[1].size.x`).
+#[derive(Default)]
+struct Finite {
+    path: Vec<String>,
+    found: Option<String>,
+}
+
+impl Finite {
+    /// Checks the numbers `values` (with their names) under the current path.
+    fn numbers(&mut self, values: &[(&str, f64)]) {
+        if self.found.is_some() {
+            return;
+        }
+        if let Some((name, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
+            let mut path = self.path.concat();
+            if !name.is_empty() {
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(name);
+            }
+            self.found = Some(path);
+        }
+    }
+
+    /// Runs `check` with `segment` appended to the path (`.name` or `[k]`).
+    fn at(&mut self, segment: String, check: impl FnOnce(&mut Self)) {
+        if self.found.is_some() {
+            return;
+        }
+        let segment = if segment.starts_with('[') || self.path.is_empty() {
+            segment
+        } else {
+            format!(".{segment}")
+        };
+        self.path.push(segment);
+        check(self);
+        self.path.pop();
+    }
+
+    fn vector(&mut self, name: &str, v: Option<&Vector3>) {
+        if let Some(v) = v {
+            self.at(name.to_owned(), |f| {
+                f.numbers(&[("x", v.x), ("y", v.y), ("z", v.z)])
+            });
+        }
+    }
+
+    fn quaternion(&mut self, name: &str, q: Option<&Quaternion>) {
+        if let Some(q) = q {
+            self.at(name.to_owned(), |f| {
+                f.numbers(&[("x", q.x), ("y", q.y), ("z", q.z), ("w", q.w)])
+            });
+        }
+    }
+
+    fn pose(&mut self, pose: Option<&Pose>) {
+        if let Some(p) = pose {
+            self.at("pose".to_owned(), |f| {
+                f.vector("position", p.position.as_ref());
+                f.quaternion("orientation", p.orientation.as_ref());
+            });
+        }
+    }
+
+    fn color(&mut self, color: Option<&Color>) {
+        if let Some(c) = color {
+            self.at("color".to_owned(), |f| {
+                f.numbers(&[("r", c.r), ("g", c.g), ("b", c.b), ("a", c.a)])
+            });
+        }
+    }
+
+    fn points(&mut self, points: &[Point3]) {
+        for (k, p) in points.iter().enumerate() {
+            self.at(format!("points[{k}]"), |f| {
+                f.numbers(&[("x", p.x), ("y", p.y), ("z", p.z)])
+            });
+        }
+    }
+
+    fn entity(&mut self, e: &SceneEntity) {
+        for (k, a) in e.arrows.iter().enumerate() {
+            self.at(format!("arrows[{k}]"), |f| {
+                f.pose(a.pose.as_ref());
+                f.numbers(&[
+                    ("shaft_length", a.shaft_length),
+                    ("shaft_diameter", a.shaft_diameter),
+                    ("head_length", a.head_length),
+                    ("head_diameter", a.head_diameter),
+                ]);
+                f.color(a.color.as_ref());
+            });
+        }
+        for (k, c) in e.cubes.iter().enumerate() {
+            self.at(format!("cubes[{k}]"), |f| {
+                f.pose(c.pose.as_ref());
+                f.vector("size", c.size.as_ref());
+                f.color(c.color.as_ref());
+            });
+        }
+        for (k, c) in e.cylinders.iter().enumerate() {
+            self.at(format!("cylinders[{k}]"), |f| {
+                f.pose(c.pose.as_ref());
+                f.vector("size", c.size.as_ref());
+                f.numbers(&[("bottom_scale", c.bottom_scale), ("top_scale", c.top_scale)]);
+                f.color(c.color.as_ref());
+            });
+        }
+        for (k, l) in e.lines.iter().enumerate() {
+            self.at(format!("lines[{k}]"), |f| {
+                f.pose(l.pose.as_ref());
+                f.numbers(&[("thickness", l.thickness)]);
+                f.points(&l.points);
+                f.color(l.color.as_ref());
+            });
+        }
+        for (k, t) in e.triangles.iter().enumerate() {
+            self.at(format!("triangles[{k}]"), |f| {
+                f.pose(t.pose.as_ref());
+                f.points(&t.points);
+                f.color(t.color.as_ref());
+            });
+        }
+        for (k, t) in e.texts.iter().enumerate() {
+            self.at(format!("texts[{k}]"), |f| {
+                f.pose(t.pose.as_ref());
+                f.numbers(&[("font_size", t.font_size)]);
+                f.color(t.color.as_ref());
+            });
         }
     }
 }
 
-impl Default for Quaternion {
-    fn default() -> Self {
-        Self::IDENTITY
+/// The first non-finite number of a scene update (a NaN or an infinity, which a viewer
+/// cannot draw), named by its path, e.g. `entities[0].cubes[1].size.x`.
+pub fn first_non_finite_scene(update: &SceneUpdate) -> Option<String> {
+    let mut f = Finite::default();
+    for (k, e) in update.entities.iter().enumerate() {
+        f.at(format!("entities[{k}]"), |f| f.entity(e));
     }
+    f.found
 }
 
-/// A position and orientation (`foxglove.Pose`) relative to the frame of the entity.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Pose {
-    /// Position (m).
-    pub position: Vector3,
-    /// Orientation.
-    pub orientation: Quaternion,
-}
-
-impl Pose {
-    /// The planar pose `(x, y, θ)` in the plane `z = 0`: position `(x, y, 0)` (m), rotation
-    /// `θ` (rad) about z.
-    pub fn planar(x: f64, y: f64, theta: f64) -> Pose {
-        Pose {
-            position: Vector3::new(x, y, 0.0),
-            orientation: Quaternion::about_z(theta),
-        }
+/// The first non-finite number of frame transforms, named by its path, e.g.
+/// `transforms[1].rotation.w`.
+pub fn first_non_finite_transforms(tf: &FrameTransforms) -> Option<String> {
+    let mut f = Finite::default();
+    for (k, t) in tf.transforms.iter().enumerate() {
+        f.at(format!("transforms[{k}]"), |f| {
+            f.vector("translation", t.translation.as_ref());
+            f.quaternion("rotation", t.rotation.as_ref());
+        });
     }
-}
-
-/// A colour (`foxglove.Color`): red, green, blue, alpha, each in `0..=1`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Color {
-    /// Red in `0..=1`.
-    pub r: f64,
-    /// Green in `0..=1`.
-    pub g: f64,
-    /// Blue in `0..=1`.
-    pub b: f64,
-    /// Alpha (opacity) in `0..=1`.
-    pub a: f64,
-}
-
-impl Color {
-    /// The colour `(r, g, b, a)`, each in `0..=1`.
-    pub const fn rgba(r: f64, g: f64, b: f64, a: f64) -> Self {
-        Self { r, g, b, a }
-    }
-
-    /// The same colour with each of r, g, b multiplied by `factor` (clamped to `0..=1`).
-    pub fn scaled(self, factor: f64) -> Self {
-        let f = |c: f64| (c * factor).clamp(0.0, 1.0);
-        Self::rgba(f(self.r), f(self.g), f(self.b), self.a)
-    }
-}
-
-/// A key–value pair of strings (`foxglove.KeyValuePair`).
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct KeyValuePair {
-    /// Key.
-    pub key: String,
-    /// Value.
-    pub value: String,
-}
-
-/// An arrow (`foxglove.ArrowPrimitive`) pointing along +x of its pose, tail at the pose's
-/// position; its total length is `shaft_length + head_length`.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ArrowPrimitive {
-    /// Position of the tail and orientation of the arrow (+x points to the head).
-    pub pose: Pose,
-    /// Length of the shaft (m).
-    pub shaft_length: f64,
-    /// Diameter of the shaft (m).
-    pub shaft_diameter: f64,
-    /// Length of the head (m).
-    pub head_length: f64,
-    /// Diameter of the head (m).
-    pub head_diameter: f64,
-    /// Colour.
-    pub color: Color,
-}
-
-/// A box (`foxglove.CubePrimitive`) centred at its pose.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct CubePrimitive {
-    /// Position of the centre and orientation.
-    pub pose: Pose,
-    /// Full extents along the pose's x, y, z axes (m).
-    pub size: Vector3,
-    /// Colour.
-    pub color: Color,
-}
-
-/// An ellipsoid (`foxglove.SpherePrimitive`) centred at its pose.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct SpherePrimitive {
-    /// Position of the centre and orientation.
-    pub pose: Pose,
-    /// Diameters along the pose's x, y, z axes (m).
-    pub size: Vector3,
-    /// Colour.
-    pub color: Color,
-}
-
-/// A cylinder or cone (`foxglove.CylinderPrimitive`) centred at its pose, axis along z.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct CylinderPrimitive {
-    /// Position of the centre and orientation (the axis is the pose's z axis).
-    pub pose: Pose,
-    /// Diameters along x and y of the bottom face, and the height along z (m).
-    pub size: Vector3,
-    /// Scale of the bottom face (1 for a cylinder, 0 for a cone pointing down).
-    pub bottom_scale: f64,
-    /// Scale of the top face (1 for a cylinder, 0 for a cone pointing up).
-    pub top_scale: f64,
-    /// Colour.
-    pub color: Color,
-}
-
-/// How the points of a [`LinePrimitive`] are joined (`foxglove.LineType`, an integer).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(into = "u8", try_from = "u8")]
-pub enum LineType {
-    /// `0`: each point joined to the next.
-    #[default]
-    LineStrip,
-    /// `1`: as a strip, and the last point joined back to the first.
-    LineLoop,
-    /// `2`: points taken in pairs, each pair a separate segment.
-    LineList,
-}
-
-impl From<LineType> for u8 {
-    fn from(t: LineType) -> u8 {
-        match t {
-            LineType::LineStrip => 0,
-            LineType::LineLoop => 1,
-            LineType::LineList => 2,
-        }
-    }
-}
-
-impl TryFrom<u8> for LineType {
-    type Error = String;
-    fn try_from(v: u8) -> Result<Self, Self::Error> {
-        match v {
-            0 => Ok(LineType::LineStrip),
-            1 => Ok(LineType::LineLoop),
-            2 => Ok(LineType::LineList),
-            _ => Err(format!("invalid foxglove.LineType {v}")),
-        }
-    }
-}
-
-/// A polyline (`foxglove.LinePrimitive`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct LinePrimitive {
-    /// How the points are joined.
-    #[serde(rename = "type")]
-    pub line_type: LineType,
-    /// Origin and orientation of the frame of `points`.
-    pub pose: Pose,
-    /// Width of the line: metres, or pixels when `scale_invariant`.
-    pub thickness: f64,
-    /// Whether `thickness` is in pixels, independent of the zoom.
-    pub scale_invariant: bool,
-    /// The points, in the frame of `pose` (m).
-    pub points: Vec<Point3>,
-    /// Colour of the whole line (used when `colors` is empty).
-    pub color: Color,
-    /// Per-point colours (empty, or one per point).
-    pub colors: Vec<Color>,
-    /// Indices into `points` to draw (empty: all points in order).
-    pub indices: Vec<u32>,
-}
-
-/// A list of filled triangles (`foxglove.TriangleListPrimitive`): points taken in threes.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct TriangleListPrimitive {
-    /// Origin and orientation of the frame of `points`.
-    pub pose: Pose,
-    /// The vertices, three per triangle, in the frame of `pose` (m).
-    pub points: Vec<Point3>,
-    /// Colour of all triangles (used when `colors` is empty).
-    pub color: Color,
-    /// Per-vertex colours (empty, or one per point).
-    pub colors: Vec<Color>,
-    /// Indices into `points` to draw (empty: all points in order).
-    pub indices: Vec<u32>,
-}
-
-/// A text label (`foxglove.TextPrimitive`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct TextPrimitive {
-    /// Position of the text (and orientation, unless `billboard`).
-    pub pose: Pose,
-    /// Whether the text always faces the camera.
-    pub billboard: bool,
-    /// Font size: metres, or pixels when `scale_invariant`.
-    pub font_size: f64,
-    /// Whether `font_size` is in pixels, independent of the zoom.
-    pub scale_invariant: bool,
-    /// Colour.
-    pub color: Color,
-    /// The text.
-    pub text: String,
-}
-
-/// A 3-D model (`foxglove.ModelPrimitive`). ricochet never draws one; the type exists so
-/// that [`SceneEntity::models`] can be emitted (always empty) and read back.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ModelPrimitive {
-    /// Origin and orientation of the model.
-    pub pose: Pose,
-    /// Scale factors along x, y, z.
-    pub scale: Vector3,
-    /// Solid colour applied when `override_color`.
-    pub color: Color,
-    /// Whether to replace the model's colours with `color`.
-    pub override_color: bool,
-    /// URL of the model, or empty when `data` holds it.
-    pub url: String,
-    /// Media type of `data` (e.g. `model/gltf-binary`).
-    pub media_type: String,
-    /// The model itself, base64-encoded, or empty when `url` is set.
-    pub data: String,
-}
-
-/// A visual element of the 3-D scene (`foxglove.SceneEntity`): primitives sharing a frame.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct SceneEntity {
-    /// Simulated time at which the entity is valid.
-    pub timestamp: Time,
-    /// Frame of the primitives' poses (`world`, or `body_<name>` for a body).
-    pub frame_id: String,
-    /// Identifier, unique on the topic; a new entity with the same id replaces the old one.
-    pub id: String,
-    /// How long the entity is shown after `timestamp`; zero means until deleted.
-    pub lifetime: Duration,
-    /// Whether the entity moves with its frame (`true`) or stays where the frame was at
-    /// `timestamp` (`false`).
-    pub frame_locked: bool,
-    /// Free-form key–value pairs shown on selection.
-    pub metadata: Vec<KeyValuePair>,
-    /// Arrows.
-    pub arrows: Vec<ArrowPrimitive>,
-    /// Boxes.
-    pub cubes: Vec<CubePrimitive>,
-    /// Ellipsoids.
-    pub spheres: Vec<SpherePrimitive>,
-    /// Cylinders.
-    pub cylinders: Vec<CylinderPrimitive>,
-    /// Lines.
-    pub lines: Vec<LinePrimitive>,
-    /// Triangle lists.
-    pub triangles: Vec<TriangleListPrimitive>,
-    /// Texts.
-    pub texts: Vec<TextPrimitive>,
-    /// Models (ricochet leaves this empty).
-    pub models: Vec<ModelPrimitive>,
-}
-
-/// What a [`SceneEntityDeletion`] removes (`foxglove.SceneEntityDeletionType`, an integer).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(into = "u8", try_from = "u8")]
-pub enum DeletionType {
-    /// `0`: the entity whose id matches.
-    #[default]
-    MatchingId,
-    /// `1`: every entity on the topic.
-    All,
-}
-
-impl From<DeletionType> for u8 {
-    fn from(t: DeletionType) -> u8 {
-        match t {
-            DeletionType::MatchingId => 0,
-            DeletionType::All => 1,
-        }
-    }
-}
-
-impl TryFrom<u8> for DeletionType {
-    type Error = String;
-    fn try_from(v: u8) -> Result<Self, Self::Error> {
-        match v {
-            0 => Ok(DeletionType::MatchingId),
-            1 => Ok(DeletionType::All),
-            _ => Err(format!("invalid foxglove.SceneEntityDeletionType {v}")),
-        }
-    }
-}
-
-/// A command to remove entities (`foxglove.SceneEntityDeletion`).
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct SceneEntityDeletion {
-    /// Only matching entities older than this are deleted.
-    pub timestamp: Time,
-    /// Which entities to delete.
-    #[serde(rename = "type")]
-    pub deletion_type: DeletionType,
-    /// The id to match when `deletion_type` is [`DeletionType::MatchingId`].
-    pub id: String,
-}
-
-/// An update of the 3-D scene (`foxglove.SceneUpdate`): deletions first, then new or
-/// replaced entities. The message type of the `/scene` topic.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct SceneUpdate {
-    /// Entities to delete.
-    pub deletions: Vec<SceneEntityDeletion>,
-    /// Entities to add or replace.
-    pub entities: Vec<SceneEntity>,
-}
-
-/// The pose of a child frame in its parent frame (`foxglove.FrameTransform`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FrameTransform {
-    /// Simulated time of the transform.
-    pub timestamp: Time,
-    /// Parent frame (`world` for ricochet's bodies).
-    pub parent_frame_id: String,
-    /// Child frame (`body_<name>`).
-    pub child_frame_id: String,
-    /// Position of the child origin in the parent frame (m).
-    pub translation: Vector3,
-    /// Orientation of the child frame in the parent frame.
-    pub rotation: Quaternion,
-}
-
-impl FrameTransform {
-    /// The planar transform `parent → child` at simulated time `t` (s): the child origin at
-    /// `(x, y, 0)` (m) of the parent, rotated by `theta` (rad) about z.
-    pub fn planar(
-        t: f64,
-        parent: &str,
-        child: &str,
-        (x, y, theta): (f64, f64, f64),
-    ) -> Result<FrameTransform, LogError> {
-        let pose = Pose::planar(x, y, theta);
-        Ok(FrameTransform {
-            timestamp: Time::from_seconds(t)?,
-            parent_frame_id: parent.to_owned(),
-            child_frame_id: child.to_owned(),
-            translation: pose.position,
-            rotation: pose.orientation,
-        })
-    }
-}
-
-/// A set of frame transforms (`foxglove.FrameTransforms`), the message type of `/tf`.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct FrameTransforms {
-    /// The transforms.
-    pub transforms: Vec<FrameTransform>,
-}
-
-/// Severity of a [`Log`] message (`foxglove.LogLevel`, an integer).
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
-)]
-#[serde(into = "u8", try_from = "u8")]
-pub enum LogLevel {
-    /// `0`: unknown.
-    #[default]
-    Unknown,
-    /// `1`: debugging detail.
-    Debug,
-    /// `2`: information, e.g. a contact mode change.
-    Info,
-    /// `3`: a warning, e.g. an accumulation of impacts or a large energy drift.
-    Warning,
-    /// `4`: an error that stopped the run.
-    Error,
-    /// `5`: a fatal error.
-    Fatal,
-}
-
-impl From<LogLevel> for u8 {
-    fn from(l: LogLevel) -> u8 {
-        match l {
-            LogLevel::Unknown => 0,
-            LogLevel::Debug => 1,
-            LogLevel::Info => 2,
-            LogLevel::Warning => 3,
-            LogLevel::Error => 4,
-            LogLevel::Fatal => 5,
-        }
-    }
-}
-
-impl TryFrom<u8> for LogLevel {
-    type Error = String;
-    fn try_from(v: u8) -> Result<Self, String> {
-        match v {
-            0 => Ok(LogLevel::Unknown),
-            1 => Ok(LogLevel::Debug),
-            2 => Ok(LogLevel::Info),
-            3 => Ok(LogLevel::Warning),
-            4 => Ok(LogLevel::Error),
-            5 => Ok(LogLevel::Fatal),
-            _ => Err(format!("invalid foxglove.LogLevel {v}")),
-        }
-    }
-}
-
-/// A text log message (`foxglove.Log`), the message type of `/log`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Log {
-    /// Simulated time of the message.
-    pub timestamp: Time,
-    /// Severity.
-    pub level: LogLevel,
-    /// The message.
-    pub message: String,
-    /// Name of the emitter (ricochet writes `ricochet`).
-    pub name: String,
-    /// Source file (ricochet writes an empty string).
-    pub file: String,
-    /// Source line (ricochet writes 0).
-    pub line: u32,
+    f.found
 }
 
 #[cfg(test)]
@@ -601,23 +311,16 @@ mod tests {
 
     #[test]
     fn time_splits_seconds_and_nanoseconds() {
-        let t = Time::from_seconds(1.25).unwrap();
-        assert_eq!(
-            t,
-            Time {
-                sec: 1,
-                nsec: 250_000_000
-            }
-        );
-        assert_eq!(t.as_nanos(), 1_250_000_000);
-        assert_eq!(Time::from_seconds(-0.0).unwrap(), Time::default());
+        let t = timestamp(1.25).unwrap();
+        assert_eq!((t.sec(), t.nsec()), (1, 250_000_000));
+        assert_eq!(t.total_nanos(), 1_250_000_000);
+        assert_eq!(seconds(&t), 1.25);
+        assert_eq!(timestamp(-0.0).unwrap(), Timestamp::new(0, 0));
         // 0.1 s is 100 000 000.000000006 ns in binary; rounding gives the decimal value.
         assert_eq!(nanoseconds(0.1).unwrap(), 100_000_000);
         // Rounding to the nearest ns carries into the next second.
-        assert_eq!(
-            Time::from_seconds(2.999_999_999_6).unwrap(),
-            Time { sec: 3, nsec: 0 }
-        );
+        assert_eq!(timestamp(2.999_999_999_6).unwrap(), Timestamp::new(3, 0));
+        assert_eq!(lifetime(0.25).unwrap(), Duration::new(0, 250_000_000));
     }
 
     #[test]
@@ -634,30 +337,76 @@ mod tests {
                 matches!(nanoseconds(t), Err(LogError::InvalidTime { .. })),
                 "{t} accepted"
             );
+            assert!(
+                timestamp(t).is_err() && lifetime(t).is_err(),
+                "{t} accepted"
+            );
         }
         // The last representable second is accepted.
-        assert_eq!(Time::from_seconds(4_294_967_295.5).unwrap().sec, u32::MAX);
-    }
-
-    #[test]
-    fn enums_serialize_as_the_schema_integers() {
-        assert_eq!(serde_json::to_string(&LogLevel::Warning).unwrap(), "3");
-        assert_eq!(serde_json::to_string(&LineType::LineList).unwrap(), "2");
-        assert_eq!(serde_json::to_string(&DeletionType::All).unwrap(), "1");
-        assert_eq!(
-            serde_json::from_str::<LogLevel>("5").unwrap(),
-            LogLevel::Fatal
-        );
-        assert!(serde_json::from_str::<LineType>("3").is_err());
+        assert_eq!(timestamp(4_294_967_295.5).unwrap().sec(), u32::MAX);
     }
 
     #[test]
     fn quaternion_about_z_rotates_x_to_the_angle() {
         // Rotating (1, 0, 0) by q = (0, 0, s, c): x' = c² − s² = cos θ, y' = 2sc = sin θ.
         let theta = 0.7;
-        let q = Quaternion::about_z(theta);
+        let q = about_z(theta);
         assert!((q.w * q.w - q.z * q.z - theta.cos()).abs() < 1e-15);
         assert!((2.0 * q.w * q.z - theta.sin()).abs() < 1e-15);
         assert!((q.w * q.w + q.z * q.z - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn non_finite_numbers_are_found_with_their_path() {
+        let mut line = LinePrimitive {
+            points: vec![point3(0.0, 0.0, 0.0), point3(1.0, 0.0, 0.0)],
+            pose: Some(planar_pose(0.0, 0.0, 0.0, 0.0)),
+            ..LinePrimitive::default()
+        };
+        let clean = |line: &LinePrimitive| SceneUpdate {
+            deletions: vec![],
+            entities: vec![
+                SceneEntity::default(),
+                SceneEntity {
+                    lines: vec![line.clone()],
+                    ..SceneEntity::default()
+                },
+            ],
+        };
+        assert_eq!(first_non_finite_scene(&clean(&line)), None);
+        line.points[1].y = f64::NAN;
+        assert_eq!(
+            first_non_finite_scene(&clean(&line)).as_deref(),
+            Some("entities[1].lines[0].points[1].y")
+        );
+        line.points[1].y = 0.0;
+        line.pose = Some(planar_pose(0.0, f64::INFINITY, 0.0, 0.0));
+        assert_eq!(
+            first_non_finite_scene(&clean(&line)).as_deref(),
+            Some("entities[1].lines[0].pose.position.y")
+        );
+        let mut tf = FrameTransforms {
+            transforms: vec![
+                planar_transform(0.0, "world", "a", (0.0, 0.0, 0.0)).unwrap(),
+                planar_transform(0.0, "world", "b", (0.0, 0.0, 0.0)).unwrap(),
+            ],
+        };
+        assert_eq!(first_non_finite_transforms(&tf), None);
+        tf.transforms[1].rotation.as_mut().unwrap().w = f64::NAN;
+        assert_eq!(
+            first_non_finite_transforms(&tf).as_deref(),
+            Some("transforms[1].rotation.w")
+        );
+    }
+
+    #[test]
+    fn protobuf_encoding_round_trips() {
+        let tf = FrameTransforms {
+            transforms: vec![planar_transform(1.5, "world", "body_rod", (1.0, -2.0, 0.3)).unwrap()],
+        };
+        let mut buffer = b"prefix".to_vec();
+        append_protobuf(&mut buffer, "/tf", &tf).unwrap();
+        let back = FrameTransforms::decode(&buffer[6..]).unwrap();
+        assert_eq!(back, tf);
     }
 }

@@ -1,23 +1,27 @@
 //! The MCAP log of a run: message types, the writer, the reader.
 //!
-//! A ricochet log is an MCAP file whose channels are all JSON-encoded with a `jsonschema`
-//! schema, stamped with *simulated* time (nanoseconds since `t = 0`):
+//! A ricochet log (format version [`FORMAT_VERSION`]) is an MCAP file whose messages are
+//! stamped with *simulated* time (nanoseconds since `t = 0`). ricochet's own records are
+//! JSON with a `jsonschema` schema (scripts read them); Foxglove's well-known types are
+//! protobuf, encoded by Foxglove's SDK (the `foxglove` crate) with its schemas:
 //!
 //! | topic | schema | content |
 //! |---|---|---|
-//! | `/state` | `ricochet.State` | [`StateRecord`]: `t`, `q[]`, `u[]`, `energy`, contact modes |
-//! | `/impacts` | `ricochet.Impact` | [`ImpactRecord`]: one entry of the impact ledger per impact |
-//! | `/scene` | `foxglove.SceneUpdate` | [`SceneUpdate`]: bodies, obstacles, impulse arrows ([`draw`]) |
-//! | `/tf` | `foxglove.FrameTransforms` | [`FrameTransforms`]: `world → body_<name>` |
-//! | `/log` | `foxglove.Log` | [`Log`]: warnings and mode changes |
+//! | `/state` | `ricochet.State` (JSON) | [`StateRecord`]: `t`, `q[]`, `u[]`, `energy`, contact modes |
+//! | `/impacts` | `ricochet.Impact` (JSON) | [`ImpactRecord`]: one entry of the impact ledger per impact |
+//! | `/geometry` | `foxglove.SceneUpdate` | every body (collision shapes and visuals) and obstacle ([`draw`]) |
+//! | `/scene` | `foxglove.SceneUpdate` | the impulse of each impact: an arrow and its value |
+//! | `/tf` | `foxglove.FrameTransforms` | `world → body_<name>`, `world → view` |
+//! | `/log` | `foxglove.Log` | one line per impact, warnings and mode changes |
 //!
-//! Metadata records make a log self-describing: `scene` (the scene's name and file text),
-//! `settings` (the run settings as JSON) and, when the run ends, `audit` (the [`Audit`]
-//! energy balance and stop reason). The schemas are embedded in the file, and shipped in
-//! `schemas/` (the Foxglove ones from npm `@foxglove/schemas`, MIT).
+//! Metadata records make a log self-describing: `ricochet` (the format version), `scene`
+//! (the scene's name and file text), `settings` (the run settings as JSON) and, when the
+//! run ends, `audit` (the [`Audit`] energy balance and stop reason). The schemas are
+//! embedded in the file; ricochet's are shipped in `schemas/ricochet/`.
 //!
-//! Output is deterministic: no wall-clock time, host name or random id is written, so two
-//! identical runs give byte-identical files.
+//! Every chunk of a log holds messages (see `sink.rs` for why it matters). Output is
+//! deterministic: no wall-clock time, host name or random id is written, so two identical
+//! runs give byte-identical files.
 //!
 //! - [`LogWriter`] writes a log (see its docs for finishing and interruption);
 //! - [`read`] reads one back, as far as it goes;
@@ -35,16 +39,14 @@ pub mod schemas;
 mod sink;
 mod writer;
 
-pub use foxglove::{
-    FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate, Time,
-};
+pub use foxglove::{FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate};
 pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
 pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
     StateRecord,
 };
 pub use run::RunLogger;
-pub use schemas::Topic;
+pub use schemas::{FORMAT_VERSION, Topic};
 pub use writer::{Compression, LogOptions, LogWriter};
 
 /// An error of the log layer. Causes are reported through `source()`, not repeated in the
@@ -91,6 +93,14 @@ pub enum LogError {
         /// The cause.
         source: serde_json::Error,
     },
+    /// A Foxglove message that protobuf cannot encode.
+    #[error("cannot encode {what} as protobuf: {message}")]
+    Protobuf {
+        /// The topic.
+        what: &'static str,
+        /// prost's message.
+        message: String,
+    },
     /// Settings or an audit that do not serialize to a JSON object.
     #[error("{what} must serialize to a JSON object")]
     NotAnObject {
@@ -104,6 +114,17 @@ pub enum LogError {
         what: String,
         /// The cause.
         source: serde_json::Error,
+    },
+    /// The body poses of the initial state could not be computed.
+    #[error("cannot compute the initial body poses")]
+    Kinematics(#[source] crate::kinematics::KinematicsError),
+    /// A metadata value of ricochet's that does not have the expected form.
+    #[error("bad metadata {what}: {value:?}")]
+    BadMetadata {
+        /// The record and key, e.g. `ricochet.format_version`.
+        what: String,
+        /// The value found.
+        value: String,
     },
     /// A shape that [`draw::add_shape`] cannot draw.
     #[error("cannot draw a parry2d {shape} shape")]

@@ -45,6 +45,9 @@ pub enum Ending {
 pub struct RunLog {
     /// The `library` field of the MCAP header (e.g. `ricochet 0.1.0`).
     pub library: String,
+    /// The log format version, from the `ricochet` metadata record; logs written before
+    /// the record existed are of version 1.
+    pub format_version: u32,
     /// The scene, if the `scene` metadata record was read.
     pub scene: Option<SceneInfo>,
     /// The settings, if the `settings` metadata record was read: one entry per top-level
@@ -95,6 +98,7 @@ pub fn read(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
 pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
     let mut log = RunLog {
         library: String::new(),
+        format_version: 1,
         scene: None,
         settings: None,
         audit: None,
@@ -162,6 +166,14 @@ pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
 /// Stores a metadata record of ricochet's in `log`; ignores others.
 fn read_metadata(log: &mut RunLog, m: Metadata) -> Result<(), LogError> {
     match m.name.as_str() {
+        metadata::RICOCHET => {
+            let version = m.metadata.get("format_version").map(String::as_str);
+            log.format_version =
+                (version.and_then(|v| v.parse().ok())).ok_or_else(|| LogError::BadMetadata {
+                    what: format!("{}.format_version", metadata::RICOCHET),
+                    value: version.unwrap_or_default().to_owned(),
+                })?;
+        }
         metadata::SCENE => {
             let mut map = m.metadata;
             log.scene = Some(SceneInfo {

@@ -3,21 +3,23 @@
 
 use std::io::{Seek, Write};
 
+use parry2d_f64::bounding_volume::{Aabb, BoundingVolume};
 use serde::Serialize;
 
-use super::draw::{self, ArrowStyle, DrawStyle, ShapeDrawing};
-use super::foxglove::{Color, Pose as FoxglovePose, Time};
+use super::draw::{self, ArrowScale, ArrowStyle, DrawStyle, ShapeDrawing, ViewTracker};
+use super::foxglove::{Color, about_z, rgba, timestamp, vector3};
 use super::{
     Audit, ContactMode, ContactState, Counters, Energy, FrameTransforms, ImpactCause, ImpactRecord,
     LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
 };
-use crate::math::{Real, Vec2};
+use crate::math::{Pose, Real, Vec2};
 use crate::model::Model;
 use crate::settings::Settings;
 use crate::sim::{
     ImpactEvent, Level, MaterialOverride, Observer, ObserverError, PairMode, RunSummary, Sample,
     StopReason,
 };
+use crate::state::{Data, State};
 
 /// Colours of the bodies, in body order (cycled).
 const PALETTE: [(f64, f64, f64); 6] = [
@@ -30,11 +32,12 @@ const PALETTE: [(f64, f64, f64); 6] = [
 ];
 
 /// Colour of the obstacles.
-const OBSTACLE: (f64, f64, f64) = (0.6, 0.6, 0.6);
+const OBSTACLE: Color = rgba(0.6, 0.6, 0.6, 1.0);
 
-/// Writes a run to an MCAP log as it goes: `/state` and `/tf` at each sample, `/impacts`
-/// and an impulse arrow on `/scene` at each impact, `/log` for messages; the scene text,
-/// the settings and, at the end, the energy audit as metadata.
+/// Writes a run to an MCAP log as it goes: the bodies and obstacles on `/geometry` at the
+/// start; `/state` and `/tf` at each sample; `/impacts`, an impulse arrow on `/scene` and a
+/// line on `/log` at each impact; `/log` for messages; the scene text, the settings and,
+/// at the end, the energy audit as metadata.
 pub struct RunLogger<W: Write + Seek + Send + 'static> {
     writer: LogWriter<W>,
     /// Pair names `<collider a>/<collider b>`, in pair order.
@@ -45,22 +48,28 @@ pub struct RunLogger<W: Write + Seek + Send + 'static> {
     gap_tol: Real,
     impacts: u64,
     arrow: ArrowStyle,
+    arrow_scale: ArrowScale,
+    /// Bounding box of each body in its own frame: its shapes and its skeleton (m).
+    local_boxes: Vec<Aabb>,
+    /// The `view` frame that keeps the mechanism in view.
+    view: ViewTracker,
     /// The `/state` record, updated in place at each sample (no allocation).
     state: StateRecord,
-    /// The `/tf` message, updated in place at each sample.
+    /// The `/tf` message, updated in place at each sample: a transform per body, then
+    /// `view → world`.
     tf: FrameTransforms,
 }
 
 impl<W: Write + Seek + Send + 'static> RunLogger<W> {
-    /// Starts the log of a run of `model`: writes the scene (`name`, file `text`), the
-    /// `settings` with the material `overrides` (so that the log describes the run it
-    /// holds), and the bodies and obstacles on `/scene` at `t0`.
+    /// Starts the log of a run of `model` from the state `initial`: writes the scene
+    /// (`name`, file `text`), the `settings` with the material `overrides` (so that the
+    /// log describes the run it holds), and the bodies and obstacles on `/geometry`.
     pub fn new(
         mut writer: LogWriter<W>,
         model: &Model,
         (name, text): (&str, &str),
         (settings, overrides): (&Settings, &MaterialOverride),
-        t0: Real,
+        initial: &State,
         gap_tol: Real,
     ) -> Result<Self, LogError> {
         #[derive(Serialize)]
@@ -69,6 +78,7 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
             settings: &'a Settings,
             material_overrides: &'a MaterialOverride,
         }
+        let t0 = initial.t;
         writer.scene(name, text)?;
         writer.settings(&AsRun {
             settings,
@@ -96,20 +106,35 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
             .iter()
             .map(|p| (side(p.a), side(p.b)))
             .collect();
-        writer.scene_update(t0, &scene_entities(model, &bodies, t0)?)?;
+        writer.geometry(t0, &geometry(model, t0)?)?;
+
+        // The mechanism at the start: its size scales the arrows, its box starts the view.
+        let local_boxes: Vec<Aabb> = (0..model.nbody()).map(|k| local_box(model, k)).collect();
+        let mut data = Data::new(model);
+        let q: Vec<Real> = initial.q.iter().copied().collect();
+        crate::kinematics::update_positions(model, &mut data, t0, &q)
+            .map_err(LogError::Kinematics)?;
+        let start = mechanism_box(&local_boxes, &data.body_pose);
+        let extent = start.maxs - start.mins;
+        let view = ViewTracker::new(&start);
+
         let contacts = (pairs.iter())
             .map(|name| ContactState::new(name.clone(), ContactMode::Free, 0.0))
             .collect();
         let state = StateRecord::new(t0, vec![], vec![], Energy::new(0.0, 0.0), contacts, 0);
         let identity = crate::math::Pose::identity();
-        let tf = draw::body_transforms(t0, bodies.iter().map(|b| (b.as_str(), identity)))?;
+        let mut tf = draw::body_transforms(t0, bodies.iter().map(|b| (b.as_str(), identity)))?;
+        tf.transforms.push(view.transform(t0)?);
         Ok(Self {
             writer,
             pairs,
             sides,
             gap_tol,
             impacts: 0,
-            arrow: ArrowStyle::default(),
+            arrow: ArrowStyle::for_size(extent.x.max(extent.y)),
+            arrow_scale: ArrowScale::default(),
+            local_boxes,
+            view,
             state,
             tf,
         })
@@ -152,12 +177,14 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
     }
 }
 
-/// The bodies (frame-locked to their frames) and the obstacles (in `world`).
-fn scene_entities(model: &Model, bodies: &[String], t: Real) -> Result<SceneUpdate, LogError> {
+/// The drawing of the whole scene for `/geometry`: each body (frame-locked to its frame)
+/// with its shapes, or its skeleton if it has none, and the obstacles (in `world`).
+fn geometry(model: &Model, t: Real) -> Result<SceneUpdate, LogError> {
     let style = DrawStyle::default();
     let mut entities = Vec::new();
-    for (k, name) in bodies.iter().enumerate() {
+    for (k, body) in model.bodies().iter().enumerate() {
         let (r, g, b) = PALETTE[k % PALETTE.len()];
+        let color = rgba(r, g, b, 1.0);
         let shapes: Vec<ShapeDrawing<'_>> = model
             .colliders()
             .iter()
@@ -165,17 +192,26 @@ fn scene_entities(model: &Model, bodies: &[String], t: Real) -> Result<SceneUpda
             .map(|c| ShapeDrawing {
                 shape: &*c.shape.0,
                 pose: c.pose,
-                color: Color::rgba(r, g, b, 1.0),
+                color,
             })
             .collect();
-        entities.push(draw::body_entity(t, name, &shapes, &style)?);
+        entities.push(draw::body_entity(t, &body.name, &shapes, &style)?);
+        // The skeleton: the visual of a body without shapes; the link of a body hinged
+        // away from its centre of mass or its children (a pendulum's rod).
+        let anchors = child_joints(model, k);
+        let reach = (anchors.iter().chain([&body.com])).any(|p| p.length() > 0.0);
+        if shapes.is_empty() || reach {
+            let skeleton = (body.com, shapes.is_empty());
+            entities.push(draw::skeleton_entity(
+                t, &body.name, &anchors, skeleton, color, &style,
+            )?);
+        }
     }
     for c in model.colliders().iter().filter(|c| c.body.is_none()) {
-        let (r, g, b) = OBSTACLE;
         let shape = ShapeDrawing {
             shape: &*c.shape.0,
             pose: c.pose,
-            color: Color::rgba(r, g, b, 1.0),
+            color: OBSTACLE,
         };
         entities.push(draw::obstacle_entity(t, &c.name, &[shape], &style)?);
     }
@@ -183,6 +219,45 @@ fn scene_entities(model: &Model, bodies: &[String], t: Real) -> Result<SceneUpda
         deletions: vec![],
         entities,
     })
+}
+
+/// Where the children of body `k` are jointed to it, in its frame (m).
+fn child_joints(model: &Model, k: usize) -> Vec<Vec2> {
+    (model.joints().iter())
+        .filter(|j| j.parent.is_some_and(|p| p.index() == k))
+        .map(|j| j.placement.translation)
+        .collect()
+}
+
+/// The bounding box of body `k` in its own frame: its shapes (half-spaces excepted), its
+/// origin, its centre of mass and its children's joints (m).
+fn local_box(model: &Model, k: usize) -> Aabb {
+    let body = &model.bodies()[k];
+    let mut aabb = Aabb::new(Vec2::ZERO, Vec2::ZERO);
+    for p in child_joints(model, k).into_iter().chain([body.com]) {
+        aabb.take_point(p);
+    }
+    for c in (model.colliders().iter()).filter(|c| c.body.is_some_and(|b| b.index() == k)) {
+        let shape_box = c.shape.0.compute_aabb(&c.pose);
+        if shape_box.mins.is_finite() && shape_box.maxs.is_finite() {
+            aabb.merge(&shape_box);
+        }
+    }
+    aabb
+}
+
+/// The bounding box in the world of the bodies at `poses`, from their boxes `local` in
+/// their own frames (m).
+fn mechanism_box(local: &[Aabb], poses: &[Pose]) -> Aabb {
+    let mut aabb = Aabb::new_invalid();
+    for (b, pose) in local.iter().zip(poses) {
+        aabb.merge(&b.transform_by(pose));
+    }
+    if aabb.mins.x > aabb.maxs.x {
+        // No bodies.
+        return Aabb::new(Vec2::ZERO, Vec2::ZERO);
+    }
+    aabb
 }
 
 fn planar(v: Vec2) -> Planar {
@@ -217,17 +292,16 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
         rec.mode_code = rec.mode.code();
         rec.impact_count = self.impacts;
         self.writer.state(&self.state)?;
-        // `/tf`: the cached transforms with this sample's poses.
-        let time = Time::from_seconds(s.t)?;
-        for (tf, pose) in self.tf.transforms.iter_mut().zip(s.poses) {
-            let p = FoxglovePose::planar(
-                pose.translation.x,
-                pose.translation.y,
-                pose.rotation.angle(),
-            );
-            tf.timestamp = time;
-            tf.translation = p.position;
-            tf.rotation = p.orientation;
+        // `/tf`: the cached transforms with this sample's poses, and the view.
+        let time = timestamp(s.t)?;
+        let center = self.view.follow(&mechanism_box(&self.local_boxes, s.poses));
+        let poses = (s.poses.iter())
+            .map(|p| (p.translation, p.rotation.angle()))
+            .chain([(-center, 0.0)]);
+        for (tf, (position, angle)) in self.tf.transforms.iter_mut().zip(poses) {
+            tf.timestamp = Some(time);
+            tf.translation = Some(vector3(position.x, position.y, 0.0));
+            tf.rotation = Some(about_z(angle));
         }
         self.writer.transforms(s.t, &self.tf)?;
         Ok(())
@@ -275,7 +349,9 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
             tangent: planar(ev.frame.t),
         };
         self.writer.impact(&record)?;
-        let arrow = draw::impulse_arrow(&record, &self.arrow)?;
+        let length =
+            (self.arrow_scale).length(record.impulse().x.hypot(record.impulse().y), &self.arrow);
+        let arrow = draw::impulse_arrow(&record, length, &self.arrow)?;
         self.writer.scene_update(
             ev.t,
             &SceneUpdate {
@@ -283,6 +359,8 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
                 entities: vec![arrow],
             },
         )?;
+        self.writer
+            .log(ev.t, LogLevel::Info, &impact_line(&record))?;
         self.impacts += 1;
         Ok(())
     }
@@ -296,4 +374,28 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
         self.writer.log(t, level, text)?;
         Ok(())
     }
+}
+
+/// The `/log` line of an impact: `impact #3 rodB/floor: newton, forward_sliding (case 3),
+/// I_n = 0.455 N·s, I_t = -0.0911 N·s, v_s = (0.0714, 0.197) m/s, ΔE = -0.0481 J`.
+fn impact_line(r: &ImpactRecord) -> String {
+    let s = draw::significant;
+    let cause = match r.cause {
+        ImpactCause::Collision => String::new(),
+        other => format!(" [{}]", other.name()),
+    };
+    format!(
+        "impact #{} {}: {}, {} (case {}){cause}, I_n = {} N·s, I_t = {} N·s, \
+         v_s = ({}, {}) m/s, ΔE = {} J",
+        r.index,
+        r.pair,
+        r.law.name(),
+        r.impact_type.name(),
+        r.case,
+        s(r.i_n),
+        s(r.i_t),
+        s(r.v_s.n),
+        s(r.v_s.t),
+        s(r.delta_e),
+    )
 }

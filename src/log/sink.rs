@@ -4,9 +4,16 @@
 //! The simulation thread checks each message (a bad number is reported at once, naming
 //! the field) and puts it in a [`Batch`]: the frequent `/state` and `/tf` samples as
 //! copies of their records, into slots that keep their allocations from one batch to the
-//! next; the rare messages as JSON. A full batch goes to the sink thread, which encodes
-//! the samples as JSON and writes every message to the `mcap::Writer` (that compresses a
-//! chunk when it is full). The simulation thread thus pays a copy per sample, and the
+//! next; the rare messages encoded (JSON or protobuf). A full batch goes to the sink
+//! thread, which encodes the samples (`/state` as JSON, `/tf` as protobuf) and writes
+//! every message to the `mcap::Writer` (that compresses a chunk when it is full).
+//!
+//! The schemas and channels are registered on the sink thread right before the first
+//! message, so that they share its chunk: a chunk that held only schemas and channels
+//! (which a metadata record written next would close) has no message index, and readers
+//! that bundle `@mcap/core` before 2025 (Foxglove Studio 1.48 among them) refuse such a
+//! file. The channel ids are fixed in advance ([`ChannelSpec::id`]), so the calling side
+//! can stamp its messages before the channels exist. The simulation thread thus pays a copy per sample, and the
 //! JSON encoding, the compression and the I/O overlap with the simulation. Batches
 //! and metadata go through one bounded channel, in order, so the file's bytes are those a
 //! writer on the calling thread would produce: two runs of the same scene still give
@@ -32,7 +39,7 @@ use mcap::McapError;
 use mcap::records::{MessageHeader, Metadata};
 
 use super::LogError;
-use super::foxglove::FrameTransforms;
+use super::foxglove::{FrameTransforms, append_protobuf};
 use super::records::StateRecord;
 use super::schemas::Topic;
 
@@ -46,13 +53,22 @@ const BATCH_MESSAGES: usize = 64;
 /// …or this many bytes.
 const BATCH_BYTES: usize = 64 * 1024;
 
+/// A channel to register before the first message, with its schema.
+pub(super) struct ChannelSpec {
+    /// The channel id (also the schema id), fixed in advance.
+    pub id: u16,
+    /// The topic.
+    pub topic: Topic,
+}
+
 /// What a message of a batch holds.
 enum Payload {
-    /// JSON bytes, `bytes[start..end]` of the batch.
+    /// Encoded bytes, `bytes[start..end]` of the batch.
     Bytes { start: usize, end: usize },
     /// The record in slot `k` of the batch's `/state` samples, encoded on the sink thread.
     State(usize),
-    /// The record in slot `k` of the batch's `/tf` samples, encoded on the sink thread.
+    /// The record in slot `k` of the batch's `/tf` samples, encoded (protobuf) on the sink
+    /// thread.
     Transforms(usize),
 }
 
@@ -61,7 +77,7 @@ enum Payload {
 #[derive(Default)]
 pub(super) struct Batch {
     messages: Vec<(MessageHeader, Payload)>,
-    /// JSON bytes of the messages encoded on the calling thread, back to back.
+    /// Bytes of the messages encoded on the calling thread, back to back.
     bytes: Vec<u8>,
     /// `/state` records; the first `n_states` are in use.
     states: Vec<StateRecord>,
@@ -138,8 +154,8 @@ fn copy_transforms(dst: &mut FrameTransforms, src: &FrameTransforms) {
                 d.timestamp = f.timestamp;
                 d.parent_frame_id.clone_from(&f.parent_frame_id);
                 d.child_frame_id.clone_from(&f.child_frame_id);
-                d.translation = f.translation;
-                d.rotation = f.rotation;
+                d.translation.clone_from(&f.translation);
+                d.rotation.clone_from(&f.rotation);
             }
             None => dst.transforms.push(f.clone()),
         }
@@ -198,15 +214,28 @@ pub(super) struct Sink<W: Write + Seek + Send + 'static> {
 }
 
 impl<W: Write + Seek + Send + 'static> Sink<W> {
-    /// Moves `mcap` to a new thread that writes what the sink is given.
-    pub(super) fn spawn(mcap: mcap::Writer<W>) -> Result<Self, LogError> {
+    /// Moves `mcap` (which must not limit its chunks' size itself) to a new thread that
+    /// writes what the sink is given, registering `channels` right before the first
+    /// message, and closing a chunk once its messages reach `chunk_size` bytes.
+    pub(super) fn spawn(
+        mcap: mcap::Writer<W>,
+        channels: Vec<ChannelSpec>,
+        chunk_size: u64,
+    ) -> Result<Self, LogError> {
+        let writing = Writing {
+            mcap,
+            channels,
+            chunk_size: chunk_size.max(1),
+            in_chunk: 0,
+            encoded: Vec::new(),
+        };
         let (commands, inbox) = sync_channel(QUEUE);
         let (recycle, spare) = sync_channel(QUEUE + 2);
         let failure = Arc::new(Failure::default());
         let shared = Arc::clone(&failure);
         let thread = std::thread::Builder::new()
             .name("ricochet-log".to_owned())
-            .spawn(move || serve(mcap, &inbox, &recycle, &shared))
+            .spawn(move || serve(writing, &inbox, &recycle, &shared))
             .map_err(LogError::Thread)?;
         Ok(Sink {
             commands: Some(commands),
@@ -331,67 +360,124 @@ impl<W: Write + Seek + Send + 'static> Drop for Sink<W> {
     }
 }
 
+/// Bytes a message record adds to a chunk besides its data: opcode (1), record length
+/// (8), channel id (2), sequence (4), log and publish times (8 + 8).
+const MESSAGE_RECORD: u64 = 31;
+
+/// The writer and its state on the sink thread.
+struct Writing<W: Write + Seek> {
+    mcap: mcap::Writer<W>,
+    /// The channels to register before the first message (empty once registered).
+    channels: Vec<ChannelSpec>,
+    /// Target size of a chunk's messages, before compression (bytes).
+    chunk_size: u64,
+    /// Size of the messages in the open chunk (bytes).
+    in_chunk: u64,
+    /// The samples encoded here, reused.
+    encoded: Vec<u8>,
+}
+
+impl<W: Write + Seek> Writing<W> {
+    /// Writes the messages of `batch`, registering the channels before the first one.
+    ///
+    /// The chunks are closed here, once their messages reach `chunk_size`, rather than by
+    /// mcap's writer: it checks the size of the open chunk *before* writing a message, so a
+    /// chunk holding schemas and channels larger than the target would be closed before
+    /// the first message, without one.
+    fn messages(&mut self, batch: &Batch) -> Result<(), LogError> {
+        if !self.channels.is_empty() {
+            register(&mut self.mcap, std::mem::take(&mut self.channels))?;
+        }
+        for (header, payload) in &batch.messages {
+            let data = match *payload {
+                Payload::Bytes { start, end } => &batch.bytes[start..end],
+                Payload::State(k) => {
+                    self.encoded.clear();
+                    append_json(&mut self.encoded, Topic::State, &batch.states[k])?;
+                    &self.encoded[..]
+                }
+                Payload::Transforms(k) => {
+                    self.encoded.clear();
+                    let tf = &batch.transforms[k];
+                    append_protobuf(&mut self.encoded, Topic::Tf.name(), tf)?;
+                    &self.encoded[..]
+                }
+            };
+            self.mcap.write_to_known_channel(header, data)?;
+            self.in_chunk += data.len() as u64 + MESSAGE_RECORD;
+            if self.in_chunk >= self.chunk_size {
+                self.close_chunk()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Closes the open chunk, if any, and flushes the writer.
+    fn close_chunk(&mut self) -> Result<(), McapError> {
+        self.in_chunk = 0;
+        self.mcap.flush()
+    }
+
+    /// Writes a metadata record (which closes the open chunk).
+    fn metadata(&mut self, metadata: &Metadata) -> Result<(), McapError> {
+        self.in_chunk = 0;
+        self.mcap.write_metadata(metadata)
+    }
+}
+
 /// The sink thread: carries out the commands in order until `Finish` (returns the writer,
 /// or `None` after an error) or the channel closes (returns `None`; dropping `mcap`
 /// finishes the file).
 fn serve<W: Write + Seek>(
-    mut mcap: mcap::Writer<W>,
+    mut writing: Writing<W>,
     inbox: &Receiver<Command>,
     recycle: &SyncSender<Batch>,
     failure: &Failure,
 ) -> Option<Result<W, McapError>> {
     let mut broken = false;
-    // The JSON of the samples encoded here, reused.
-    let mut json = Vec::new();
     for command in inbox {
-        match command {
+        let result = match command {
             Command::Messages(batch) => {
-                for (header, payload) in &batch.messages {
-                    if broken {
-                        break;
-                    }
-                    let encoded = match *payload {
-                        Payload::Bytes { start, end } => Ok(&batch.bytes[start..end]),
-                        Payload::State(k) => encode(&mut json, Topic::State, &batch.states[k]),
-                        Payload::Transforms(k) => {
-                            encode(&mut json, Topic::Tf, &batch.transforms[k])
-                        }
-                    };
-                    let written =
-                        encoded.and_then(|data| Ok(mcap.write_to_known_channel(header, data)?));
-                    if let Err(e) = written {
-                        broken = true;
-                        failure.set(e);
-                    }
-                }
+                let written = if broken {
+                    Ok(())
+                } else {
+                    writing.messages(&batch)
+                };
                 // The batch goes back for reuse; if the pool is full, it is dropped.
                 let _ = recycle.try_send(batch);
+                written
             }
-            Command::Metadata(metadata) => {
-                if !broken && let Err(e) = mcap.write_metadata(&metadata) {
-                    broken = true;
-                    failure.set(e.into());
-                }
-            }
+            Command::Metadata(_) if broken => Ok(()),
+            Command::Metadata(metadata) => writing.metadata(&metadata).map_err(LogError::from),
             Command::Flush(answer) => {
-                let result = if broken { Ok(()) } else { mcap.flush() };
+                let result = if broken {
+                    Ok(())
+                } else {
+                    writing.close_chunk()
+                };
                 let _ = answer.send(result);
+                Ok(())
             }
             Command::Finish if broken => return None,
             Command::Finish => {
+                let mut mcap = writing.mcap;
                 return Some(mcap.finish().and_then(|_summary| {
                     let mut inner = mcap.into_inner();
                     inner.flush().map_err(McapError::from)?;
                     Ok(inner)
                 }));
             }
+        };
+        if let Err(e) = result {
+            broken = true;
+            failure.set(e);
         }
     }
     None
 }
 
 /// Appends `message` as JSON to `buffer`; on an error `buffer` is left as it was. The one
-/// encoding of every message of the log, on either thread.
+/// JSON encoding of the log's messages, on either thread.
 pub(super) fn append_json<M: serde::Serialize>(
     buffer: &mut Vec<u8>,
     topic: Topic,
@@ -407,13 +493,38 @@ pub(super) fn append_json<M: serde::Serialize>(
     })
 }
 
-/// `message` as JSON in `json` (cleared first).
-fn encode<'j, M: serde::Serialize>(
-    json: &'j mut Vec<u8>,
-    topic: Topic,
-    message: &M,
-) -> Result<&'j [u8], LogError> {
-    json.clear();
-    append_json(json, topic, message)?;
-    Ok(json)
+/// Registers the schemas and channels of `channels`, with their fixed ids. Topics of the
+/// same schema share one schema record, whose id is that of the first of them.
+fn register<W: Write + Seek>(
+    mcap: &mut mcap::Writer<W>,
+    channels: Vec<ChannelSpec>,
+) -> Result<(), McapError> {
+    let mut schemas: Vec<(&str, u16)> = Vec::new();
+    for spec in channels {
+        let topic = spec.topic;
+        let schema_id = match schemas
+            .iter()
+            .find(|(name, _)| *name == topic.schema_name())
+        {
+            Some(&(_, id)) => id,
+            None => {
+                mcap.add_schema_with_id(
+                    spec.id,
+                    topic.schema_name(),
+                    topic.schema_encoding(),
+                    &topic.schema(),
+                )?;
+                schemas.push((topic.schema_name(), spec.id));
+                spec.id
+            }
+        };
+        mcap.add_channel_with_id(
+            spec.id,
+            schema_id,
+            topic.name(),
+            topic.message_encoding(),
+            &std::collections::BTreeMap::new(),
+        )?;
+    }
+    Ok(())
 }

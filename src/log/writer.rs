@@ -1,5 +1,6 @@
 //! [`LogWriter`]: a thin adaptor over `mcap::Writer` that registers ricochet's schemas and
-//! channels once, then writes JSON messages to known channels.
+//! channels once, then writes messages to known channels: ricochet's records as JSON,
+//! Foxglove's types protobuf-encoded by Foxglove's SDK.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -10,10 +11,13 @@ use mcap::records::{MessageHeader, Metadata};
 use serde::Serialize;
 
 use super::LogError;
-use super::foxglove::{FrameTransforms, Log, LogLevel, SceneUpdate, Time, nanoseconds};
+use super::foxglove::{
+    Encode, FrameTransforms, Log, LogLevel, SceneUpdate, append_protobuf, first_non_finite_scene,
+    first_non_finite_transforms, nanoseconds, timestamp,
+};
 use super::records::{Audit, ImpactRecord, StateRecord};
-use super::schemas::{MESSAGE_ENCODING, SCHEMA_ENCODING, Topic, metadata};
-use super::sink::{Sink, append_json};
+use super::schemas::{FORMAT_VERSION, Topic, metadata};
+use super::sink::{ChannelSpec, Sink, append_json};
 
 /// Compression of the MCAP chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -34,7 +38,7 @@ pub enum Compression {
 pub struct LogOptions {
     /// Compression of the chunks.
     pub compression: Compression,
-    /// Target size of a chunk before compression (bytes). A process killed without
+    /// Target size of the messages of a chunk before compression (bytes). A process killed without
     /// finishing the file loses at most the chunk being written, unless
     /// [`LogWriter::flush`] was called since.
     pub chunk_size: u64,
@@ -55,27 +59,29 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 
 /// Writes a ricochet run to an MCAP file.
 ///
-/// The five channels of [`Topic::ALL`] and their schemas are registered when the writer is
-/// created; each method then writes one message to its known channel, with
-/// `log_time = publish_time =` the simulated time in nanoseconds ([`nanoseconds`]: a time
-/// that is negative, NaN, infinite or beyond `2³²` s is refused with
-/// [`LogError::InvalidTime`]). Messages holding a NaN or an infinity are refused with
-/// [`LogError::NonFinite`] naming the field (JSON has no such numbers). A refused message
-/// is not written, and the writer stays usable.
+/// The six channels of [`Topic::ALL`] have fixed ids (1 to 6, in that order); their
+/// schemas and channels are written right before the first message, in its chunk, so that
+/// no chunk of the file is without messages (see `sink.rs`). Each method writes one
+/// message to its known channel, with `log_time = publish_time =` the simulated time in
+/// nanoseconds ([`nanoseconds`]: a time that is negative, NaN, infinite or beyond `2³²` s
+/// is refused with [`LogError::InvalidTime`]). Messages holding a NaN or an infinity are
+/// refused with [`LogError::NonFinite`] naming the field. A refused message is not
+/// written, and the writer stays usable.
 ///
-/// The messages are encoded as JSON on the calling thread; the `mcap::Writer` (which
-/// compresses the chunks and writes them out) runs on a thread of its own, fed in order
-/// through a bounded channel, so that logging overlaps with the simulation and the bytes
-/// are the same as a single-threaded writer's (see `sink.rs`). An I/O error is therefore
-/// reported by the call after the one whose message met it (or by `flush`, `finish`).
+/// The rare messages are encoded on the calling thread; the `/state` and `/tf` samples are
+/// copied and encoded on the thread of the `mcap::Writer` (which compresses the chunks and
+/// writes them out), fed in order through a bounded channel, so that logging overlaps with
+/// the simulation and the bytes are the same as a single-threaded writer's (see
+/// `sink.rs`). An I/O error is therefore reported by the call after the one whose message
+/// met it (or by `flush`, `finish`).
 ///
 /// Ending a run: call [`finish`](LogWriter::finish), which writes the summary section and
 /// reports any I/O error. If the writer is dropped instead (an early return on error, a
 /// panic unwinding), `mcap::Writer`'s `Drop` still finishes the file, ignoring errors: the
 /// log is a valid MCAP file holding everything written so far (dropping waits for the
-/// writer thread). A process that is killed
-/// outright leaves a file without a summary; [`read`](super::read()) (and `mcap`'s
-/// `MessageStream`) still read it up to the last complete chunk, so call
+/// writer thread). A process that is killed outright leaves a file without a summary;
+/// [`read`](super::read()) still reads it up to the last complete chunk, and
+/// [`repair`](super::repair()) makes it a finished file; call
 /// [`flush`](LogWriter::flush) at points worth keeping.
 ///
 /// ```
@@ -91,9 +97,7 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 /// ```
 pub struct LogWriter<W: Write + Seek + Send + 'static> {
     mcap: Sink<W>,
-    /// Channel id of each topic, indexed by [`Topic::index`].
-    channels: [u16; Topic::ALL.len()],
-    /// Next sequence number of each topic.
+    /// Next sequence number of each topic, indexed by [`Topic::index`].
     sequences: [u32; Topic::ALL.len()],
 }
 
@@ -110,24 +114,25 @@ impl LogWriter<BufWriter<File>> {
 }
 
 impl<W: Write + Seek + Send + 'static> LogWriter<W> {
-    /// Starts a log in `writer`: the MCAP header, then the schemas and channels of every
-    /// topic, in a first chunk that is flushed at once.
+    /// Starts a log in `writer`: the MCAP header and the `ricochet` metadata record (the
+    /// log format version); the channels follow with the first message.
     pub fn new(writer: W, options: LogOptions) -> Result<Self, LogError> {
         let mut mcap = mcap_options(options).create(writer)?;
-        let mut channels = [0; Topic::ALL.len()];
-        for topic in Topic::ALL {
-            let schema = mcap.add_schema(
-                topic.schema_name(),
-                SCHEMA_ENCODING,
-                topic.schema().as_bytes(),
-            )?;
-            channels[topic.index()] =
-                mcap.add_channel(schema, topic.name(), MESSAGE_ENCODING, &BTreeMap::new())?;
-        }
-        mcap.flush()?;
+        mcap.write_metadata(&Metadata {
+            name: metadata::RICOCHET.to_owned(),
+            metadata: BTreeMap::from([
+                ("format_version".to_owned(), FORMAT_VERSION.to_string()),
+                ("version".to_owned(), env!("CARGO_PKG_VERSION").to_owned()),
+            ]),
+        })?;
+        let channels = (Topic::ALL.into_iter())
+            .map(|topic| ChannelSpec {
+                id: channel_id(topic),
+                topic,
+            })
+            .collect();
         Ok(LogWriter {
-            mcap: Sink::spawn(mcap)?,
-            channels,
+            mcap: Sink::spawn(mcap, channels, options.chunk_size)?,
             sequences: [0; Topic::ALL.len()],
         })
     }
@@ -188,20 +193,28 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
                 field,
             });
         }
-        self.write(Topic::Impacts, impact.t, impact)
+        let time = nanoseconds(impact.t)?;
+        let start = self.mcap.buffer().len();
+        append_json(self.mcap.buffer(), Topic::Impacts, impact)?;
+        self.push(Topic::Impacts, time, start)
     }
 
-    /// Writes a scene update on `/scene` at simulated time `t` (s). The entities carry their
-    /// own timestamps, which the 3-D panel uses; normally they equal `t`.
+    /// Writes the drawing of every body and obstacle on `/geometry` at simulated time `t`
+    /// (s). The entities carry their own timestamps, which the 3-D panel uses.
+    pub fn geometry(&mut self, t: f64, update: &SceneUpdate) -> Result<(), LogError> {
+        self.scene_on(Topic::Geometry, t, update)
+    }
+
+    /// Writes transient drawings (impulse arrows) on `/scene` at simulated time `t` (s).
     pub fn scene_update(&mut self, t: f64, update: &SceneUpdate) -> Result<(), LogError> {
-        self.write_checked(Topic::Scene, t, update)
+        self.scene_on(Topic::Scene, t, update)
     }
 
     /// Writes frame transforms on `/tf` at simulated time `t` (s) (encoded on the writer
     /// thread).
     pub fn transforms(&mut self, t: f64, transforms: &FrameTransforms) -> Result<(), LogError> {
         let time = nanoseconds(t)?;
-        if let Some(field) = first_non_finite_transform(transforms) {
+        if let Some(field) = first_non_finite_transforms(transforms) {
             return Err(LogError::NonFinite {
                 what: Topic::Tf.name(),
                 t,
@@ -217,14 +230,14 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     /// Writes a text message on `/log` at simulated time `t` (s), from `ricochet`.
     pub fn log(&mut self, t: f64, level: LogLevel, message: &str) -> Result<(), LogError> {
         let log = Log {
-            timestamp: Time::from_seconds(t)?,
-            level,
+            timestamp: Some(timestamp(t)?),
+            level: level as i32,
             message: message.to_owned(),
             name: "ricochet".to_owned(),
             file: String::new(),
             line: 0,
         };
-        self.write(Topic::Log, t, &log)
+        self.write_protobuf(Topic::Log, t, &log)
     }
 
     /// Closes the current chunk and flushes it to the underlying writer, so that a process
@@ -239,47 +252,33 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         self.mcap.finish()
     }
 
-    /// Serializes `message` and writes it on `topic` at simulated time `t` (s).
-    fn write<M: Serialize>(&mut self, topic: Topic, t: f64, message: &M) -> Result<(), LogError> {
-        let time = nanoseconds(t)?;
-        let start = self.encode(topic, message)?;
-        self.write_encoded(topic, time, start)
+    /// A scene update on `topic`, refused if it holds a NaN or an infinity.
+    fn scene_on(&mut self, topic: Topic, t: f64, update: &SceneUpdate) -> Result<(), LogError> {
+        if let Some(field) = first_non_finite_scene(update) {
+            return Err(LogError::NonFinite {
+                what: topic.name(),
+                t,
+                field,
+            });
+        }
+        self.write_protobuf(topic, t, update)
     }
 
-    /// [`write`](Self::write) for a message whose numbers are not checked beforehand:
-    /// refuses it if it holds a NaN or an infinity, which `serde_json` writes as `null`
-    /// (the Foxglove schemas have no nullable field, so a `null` can only come from one).
-    /// The encoded bytes are scanned for `null`; only if they hold one (which a name may
-    /// also do) is the message examined field by field.
-    fn write_checked<M: Serialize>(
+    /// Encodes `message` as protobuf and writes it on `topic` at simulated time `t` (s).
+    fn write_protobuf<M: Encode>(
         &mut self,
         topic: Topic,
         t: f64,
         message: &M,
     ) -> Result<(), LogError> {
         let time = nanoseconds(t)?;
-        let start = self.encode(topic, message)?;
-        let encoded = &self.mcap.buffer()[start..];
-        if encoded.windows(4).any(|w| w == b"null")
-            && let Err(e) = check_finite(topic, t, message)
-        {
-            self.mcap.buffer().truncate(start);
-            return Err(e);
-        }
-        self.write_encoded(topic, time, start)
-    }
-
-    /// Appends `message`'s JSON to the sink's buffer; returns where it starts. On an
-    /// error the buffer is left as it was.
-    fn encode<M: Serialize>(&mut self, topic: Topic, message: &M) -> Result<usize, LogError> {
-        let buffer = self.mcap.buffer();
-        let start = buffer.len();
-        append_json(buffer, topic, message)?;
-        Ok(start)
+        let start = self.mcap.buffer().len();
+        append_protobuf(self.mcap.buffer(), topic.name(), message)?;
+        self.push(topic, time, start)
     }
 
     /// Hands the message encoded from `start` on to the sink, on `topic` at `time` (ns).
-    fn write_encoded(&mut self, topic: Topic, time: u64, start: usize) -> Result<(), LogError> {
+    fn push(&mut self, topic: Topic, time: u64, start: usize) -> Result<(), LogError> {
         let header = self.header(topic, time);
         self.mcap.push(header, start)?;
         self.advance(topic);
@@ -290,7 +289,7 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     fn header(&self, topic: Topic, time: u64) -> MessageHeader {
         let i = topic.index();
         MessageHeader {
-            channel_id: self.channels[i],
+            channel_id: channel_id(topic),
             sequence: self.sequences[i],
             log_time: time,
             publish_time: time,
@@ -311,55 +310,9 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     }
 }
 
-/// The first non-finite number of `tf`, named as in its JSON (`transforms[1].rotation.w`).
-fn first_non_finite_transform(tf: &FrameTransforms) -> Option<String> {
-    tf.transforms.iter().enumerate().find_map(|(k, f)| {
-        let (p, r) = (f.translation, f.rotation);
-        [
-            ("translation.x", p.x),
-            ("translation.y", p.y),
-            ("translation.z", p.z),
-            ("rotation.x", r.x),
-            ("rotation.y", r.y),
-            ("rotation.z", r.z),
-            ("rotation.w", r.w),
-        ]
-        .into_iter()
-        .find(|(_, v)| !v.is_finite())
-        .map(|(name, _)| format!("transforms[{k}].{name}"))
-    })
-}
-
-/// Refuses a message with a NaN or an infinity (a `null` in its JSON), naming the field.
-fn check_finite<M: Serialize>(topic: Topic, t: f64, message: &M) -> Result<(), LogError> {
-    let what = topic.name();
-    let json = serde_json::to_value(message).map_err(|source| LogError::Encode { what, source })?;
-    match first_null(&json) {
-        None => Ok(()),
-        Some(field) => Err(LogError::NonFinite { what, t, field }),
-    }
-}
-
-/// The path (`entities[0].cubes[1].size.x`) of the first `null` in `value`, if any.
-fn first_null(value: &serde_json::Value) -> Option<String> {
-    use serde_json::Value;
-    match value {
-        Value::Null => Some(String::new()),
-        Value::Array(items) => (items.iter().enumerate())
-            .find_map(|(i, v)| first_null(v).map(|rest| format!("[{i}]{}", dotted(&rest)))),
-        Value::Object(fields) => (fields.iter())
-            .find_map(|(k, v)| first_null(v).map(|rest| format!("{k}{}", dotted(&rest)))),
-        _ => None,
-    }
-}
-
-/// `rest` as the continuation of a path: `.x`, `[3]`, or nothing.
-fn dotted(rest: &str) -> String {
-    if rest.is_empty() || rest.starts_with('[') {
-        rest.to_owned()
-    } else {
-        format!(".{rest}")
-    }
+/// The channel id of `topic`: its position in [`Topic::ALL`], from 1.
+fn channel_id(topic: Topic) -> u16 {
+    topic.index() as u16 + 1
 }
 
 /// The mcap options for `options`: chunked, CRCs and indexes on, deterministic.
@@ -374,7 +327,9 @@ fn mcap_options(options: LogOptions) -> mcap::WriteOptions {
         .profile("")
         .library(LIBRARY)
         .compression(compression)
-        .chunk_size(Some(options.chunk_size.max(1)));
+        // The sink closes the chunks (see `sink.rs`): mcap's own limit could close a chunk
+        // holding only schemas and channels.
+        .chunk_size(None);
     // zstd's multithreaded mode (mcap's default: one worker per core) is single-threaded
     // here, so that the bytes do not depend on the machine.
     #[cfg(feature = "zstd")]

@@ -40,7 +40,12 @@ fn header(out: &mut String, log: &RunLog, file: &str) {
         .as_ref()
         .map_or("(no scene record)", |s| s.name.as_str());
     let _ = writeln!(out, "scene: {scene}");
-    let _ = writeln!(out, "file: {file}, written by {}", or_unknown(&log.library));
+    let _ = writeln!(
+        out,
+        "file: {file}, written by {}, log format {}",
+        or_unknown(&log.library),
+        log.format_version
+    );
     match &log.ending {
         Ending::Complete => {
             let _ = writeln!(out, "  complete");
@@ -49,7 +54,7 @@ fn header(out: &mut String, log: &RunLog, file: &str) {
             let _ = writeln!(
                 out,
                 "  truncated after byte {offset} ({error}): the process writing it stopped \
-                 early; everything before was read"
+                 early; everything before was read (`ricochet repair` makes it a finished file)"
             );
         }
     }

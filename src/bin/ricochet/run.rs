@@ -180,7 +180,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &scene.model,
         (&scene.name, &scene.text),
         (&scene.settings, &overrides),
-        scene.initial.t,
+        &scene.initial,
         gap_tol,
     )?;
     let progress = std::io::stderr().is_terminal().then(|| {
