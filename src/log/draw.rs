@@ -301,28 +301,44 @@ pub struct ViewTracker {
 impl ViewTracker {
     /// A tracker for a mechanism whose bounding box is `aabb` at the start: centred on it,
     /// with a dead zone of half-side `max(0.75 × the larger half-extent, 0.25 m)`.
+    ///
+    /// A box that is not finite (a body at 1e308 m) gives the origin and the smallest
+    /// zone, so that the view stays drawable.
     pub fn new(aabb: &Aabb) -> ViewTracker {
         let half = 0.5 * (aabb.maxs - aabb.mins);
+        let center = 0.5 * (aabb.mins + aabb.maxs);
+        let margin = (0.75 * half.x.max(half.y)).max(0.25);
         ViewTracker {
-            center: 0.5 * (aabb.mins + aabb.maxs),
-            margin: (0.75 * half.x.max(half.y)).max(0.25),
+            center: if center.is_finite() {
+                center
+            } else {
+                Vector::ZERO
+            },
+            margin: if margin.is_finite() { margin } else { 0.25 },
         }
     }
 
     /// Moves the centre so that `aabb` lies in the dead zone (per axis; a box larger than
-    /// the zone is centred), and returns it (m).
+    /// the zone is centred), and returns it (m). A box with a NaN or an infinity is not
+    /// followed: the view stays where it is.
     pub fn follow(&mut self, aabb: &Aabb) -> Vector {
+        if !(aabb.mins.is_finite() && aabb.maxs.is_finite()) {
+            return self.center;
+        }
         let axis = |c: f64, lo: f64, hi: f64| {
             if hi - lo > 2.0 * self.margin {
                 0.5 * (lo + hi)
             } else {
-                c.clamp(hi - self.margin, lo + self.margin)
+                c.max(hi - self.margin).min(lo + self.margin)
             }
         };
-        self.center = Vector::new(
+        let center = Vector::new(
             axis(self.center.x, aabb.mins.x, aabb.maxs.x),
             axis(self.center.y, aabb.mins.y, aabb.maxs.y),
         );
+        if center.is_finite() {
+            self.center = center;
+        }
         self.center
     }
 
@@ -360,9 +376,11 @@ pub struct ArrowStyle {
 impl ArrowStyle {
     /// Arrows for a mechanism of size `size` (m, the larger side of its bounding box): the
     /// largest impulse is drawn `0.4 size` long (at least 0.1 m), the smallest `0.2` of that.
+    /// A size that is not finite gives the default length.
     pub fn for_size(size: f64) -> ArrowStyle {
+        let length = (0.4 * size).max(0.1);
         ArrowStyle {
-            length: (0.4 * size).max(0.1),
+            length: if length.is_finite() { length } else { 0.5 },
             ..ArrowStyle::default()
         }
     }
@@ -739,6 +757,14 @@ mod tests {
             view.follow(&aabb(-5.0, -1.5, 5.0, -0.5)),
             Vector::new(0.0, -1.0)
         );
+        // A box with a NaN or an infinity leaves the view where it is, and no panic.
+        let here = view.center;
+        assert_eq!(view.follow(&aabb(f64::NAN, 0.0, 1.0, 1.0)), here);
+        assert_eq!(view.follow(&aabb(0.0, 0.0, f64::INFINITY, 1.0)), here);
+        // A box beyond f64's range at the start: the origin and the smallest zone.
+        let lost = ViewTracker::new(&aabb(-1e308, 0.0, 1e308, 1.0));
+        assert_eq!((lost.center, lost.margin), (Vector::new(0.0, 0.5), 0.25));
+        assert_eq!(ArrowStyle::for_size(f64::INFINITY).length, 0.5);
     }
 
     #[test]
