@@ -190,7 +190,7 @@ fn impact(k: usize) -> ImpactRecord {
             CollisionType::ForwardSliding,
         ][k],
         case: [1, 3, 5][k],
-        alpha: v_a.t / v_a.n.abs(),
+        alpha: Some(v_a.t / v_a.n.abs()),
         w: ImpactMatrix::new(mnn, mnt, mtt),
         g: mu * mtt - mnt,
         h: mnn - mu * mnt,

@@ -241,8 +241,10 @@ pub struct ImpactRecord {
     pub impact_type: CollisionType,
     /// The sign case 1–5 of `(g, h, p, q)` [P, Table 1].
     pub case: u8,
-    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)] (dimensionless).
-    pub alpha: f64,
+    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)] (dimensionless); `None` (JSON `null`) when it is
+    /// not a finite number: an impact without collision (`v_n^A = 0`, Painlevé's paradox)
+    /// has no α.
+    pub alpha: Option<f64>,
     /// `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)].
     pub w: ImpactMatrix,
     /// `g = μ m_tt − m_nt` [P, Eq. (35)].
@@ -310,7 +312,7 @@ impl ImpactRecord {
     /// on their own).
     pub(crate) fn first_non_finite(&self) -> Option<String> {
         let scalars = [
-            ("alpha", self.alpha),
+            ("alpha", self.alpha.unwrap_or(0.0)),
             ("w.mnn", self.w.nn),
             ("w.mnt", self.w.nt),
             ("w.mtt", self.w.tt),

@@ -318,7 +318,7 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
             law: out.law,
             impact_type: out.kind,
             case: out.case.number(),
-            alpha: c.alpha(),
+            alpha: Some(c.alpha()).filter(|a| a.is_finite()),
             w: ev.w,
             g: c.g,
             h: c.h,

@@ -114,7 +114,7 @@ fn ledger(out: &mut String, impacts: &[ImpactRecord]) {
                 i.law.to_string(),
                 i.impact_type.name().to_owned(),
                 i.case.to_string(),
-                num(i.alpha),
+                i.alpha.map_or("—".to_owned(), num),
                 num(i.i_n),
                 num(i.i_t),
                 num(i.v_s.n),
