@@ -147,58 +147,61 @@ pub fn append_protobuf<M: Encode>(
     })
 }
 
-/// Collects the first non-finite number of a message, with its path
-/// (`entities[0].cubes[1].size.x`).
+/// One step of the path to a number: a field, or an element of a list field.
+#[derive(Clone, Copy)]
+enum Segment {
+    Field(&'static str),
+    Item(&'static str, usize),
+}
+
+/// Finds the first non-finite number of a message and names it by its path
+/// (`entities[0].cubes[1].size.x`). The path is kept as segments on the stack and written
+/// out only when a number is found, so that checking a clean message allocates nothing.
 #[derive(Default)]
 struct Finite {
-    path: Vec<String>,
+    path: arrayvec::ArrayVec<Segment, 8>,
     found: Option<String>,
 }
 
 impl Finite {
     /// Checks the numbers `values` (with their names) under the current path.
-    fn numbers(&mut self, values: &[(&str, f64)]) {
+    fn numbers(&mut self, values: &[(&'static str, f64)]) {
         if self.found.is_some() {
             return;
         }
-        if let Some((name, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
-            let mut path = self.path.concat();
-            if !name.is_empty() {
-                if !path.is_empty() {
-                    path.push('.');
+        if let Some(&(name, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
+            let mut path = String::new();
+            for segment in self.path.iter().copied().chain([Segment::Field(name)]) {
+                let dot = if path.is_empty() { "" } else { "." };
+                match segment {
+                    Segment::Field(f) => path.push_str(&format!("{dot}{f}")),
+                    Segment::Item(f, k) => path.push_str(&format!("{dot}{f}[{k}]")),
                 }
-                path.push_str(name);
             }
             self.found = Some(path);
         }
     }
 
-    /// Runs `check` with `segment` appended to the path (`.name` or `[k]`).
-    fn at(&mut self, segment: String, check: impl FnOnce(&mut Self)) {
-        if self.found.is_some() {
+    /// Runs `check` with `segment` appended to the path.
+    fn at(&mut self, segment: Segment, check: impl FnOnce(&mut Self)) {
+        if self.found.is_some() || self.path.try_push(segment).is_err() {
             return;
         }
-        let segment = if segment.starts_with('[') || self.path.is_empty() {
-            segment
-        } else {
-            format!(".{segment}")
-        };
-        self.path.push(segment);
         check(self);
         self.path.pop();
     }
 
-    fn vector(&mut self, name: &str, v: Option<&Vector3>) {
+    fn vector(&mut self, name: &'static str, v: Option<&Vector3>) {
         if let Some(v) = v {
-            self.at(name.to_owned(), |f| {
+            self.at(Segment::Field(name), |f| {
                 f.numbers(&[("x", v.x), ("y", v.y), ("z", v.z)])
             });
         }
     }
 
-    fn quaternion(&mut self, name: &str, q: Option<&Quaternion>) {
+    fn quaternion(&mut self, name: &'static str, q: Option<&Quaternion>) {
         if let Some(q) = q {
-            self.at(name.to_owned(), |f| {
+            self.at(Segment::Field(name), |f| {
                 f.numbers(&[("x", q.x), ("y", q.y), ("z", q.z), ("w", q.w)])
             });
         }
@@ -206,7 +209,7 @@ impl Finite {
 
     fn pose(&mut self, pose: Option<&Pose>) {
         if let Some(p) = pose {
-            self.at("pose".to_owned(), |f| {
+            self.at(Segment::Field("pose"), |f| {
                 f.vector("position", p.position.as_ref());
                 f.quaternion("orientation", p.orientation.as_ref());
             });
@@ -215,7 +218,7 @@ impl Finite {
 
     fn color(&mut self, color: Option<&Color>) {
         if let Some(c) = color {
-            self.at("color".to_owned(), |f| {
+            self.at(Segment::Field("color"), |f| {
                 f.numbers(&[("r", c.r), ("g", c.g), ("b", c.b), ("a", c.a)])
             });
         }
@@ -223,7 +226,7 @@ impl Finite {
 
     fn points(&mut self, points: &[Point3]) {
         for (k, p) in points.iter().enumerate() {
-            self.at(format!("points[{k}]"), |f| {
+            self.at(Segment::Item("points", k), |f| {
                 f.numbers(&[("x", p.x), ("y", p.y), ("z", p.z)])
             });
         }
@@ -231,7 +234,7 @@ impl Finite {
 
     fn entity(&mut self, e: &SceneEntity) {
         for (k, a) in e.arrows.iter().enumerate() {
-            self.at(format!("arrows[{k}]"), |f| {
+            self.at(Segment::Item("arrows", k), |f| {
                 f.pose(a.pose.as_ref());
                 f.numbers(&[
                     ("shaft_length", a.shaft_length),
@@ -243,14 +246,14 @@ impl Finite {
             });
         }
         for (k, c) in e.cubes.iter().enumerate() {
-            self.at(format!("cubes[{k}]"), |f| {
+            self.at(Segment::Item("cubes", k), |f| {
                 f.pose(c.pose.as_ref());
                 f.vector("size", c.size.as_ref());
                 f.color(c.color.as_ref());
             });
         }
         for (k, c) in e.cylinders.iter().enumerate() {
-            self.at(format!("cylinders[{k}]"), |f| {
+            self.at(Segment::Item("cylinders", k), |f| {
                 f.pose(c.pose.as_ref());
                 f.vector("size", c.size.as_ref());
                 f.numbers(&[("bottom_scale", c.bottom_scale), ("top_scale", c.top_scale)]);
@@ -258,7 +261,7 @@ impl Finite {
             });
         }
         for (k, l) in e.lines.iter().enumerate() {
-            self.at(format!("lines[{k}]"), |f| {
+            self.at(Segment::Item("lines", k), |f| {
                 f.pose(l.pose.as_ref());
                 f.numbers(&[("thickness", l.thickness)]);
                 f.points(&l.points);
@@ -266,14 +269,14 @@ impl Finite {
             });
         }
         for (k, t) in e.triangles.iter().enumerate() {
-            self.at(format!("triangles[{k}]"), |f| {
+            self.at(Segment::Item("triangles", k), |f| {
                 f.pose(t.pose.as_ref());
                 f.points(&t.points);
                 f.color(t.color.as_ref());
             });
         }
         for (k, t) in e.texts.iter().enumerate() {
-            self.at(format!("texts[{k}]"), |f| {
+            self.at(Segment::Item("texts", k), |f| {
                 f.pose(t.pose.as_ref());
                 f.numbers(&[("font_size", t.font_size)]);
                 f.color(t.color.as_ref());
@@ -287,7 +290,7 @@ impl Finite {
 pub fn first_non_finite_scene(update: &SceneUpdate) -> Option<String> {
     let mut f = Finite::default();
     for (k, e) in update.entities.iter().enumerate() {
-        f.at(format!("entities[{k}]"), |f| f.entity(e));
+        f.at(Segment::Item("entities", k), |f| f.entity(e));
     }
     f.found
 }
@@ -297,7 +300,7 @@ pub fn first_non_finite_scene(update: &SceneUpdate) -> Option<String> {
 pub fn first_non_finite_transforms(tf: &FrameTransforms) -> Option<String> {
     let mut f = Finite::default();
     for (k, t) in tf.transforms.iter().enumerate() {
-        f.at(format!("transforms[{k}]"), |f| {
+        f.at(Segment::Item("transforms", k), |f| {
             f.vector("translation", t.translation.as_ref());
             f.quaternion("rotation", t.rotation.as_ref());
         });
