@@ -27,74 +27,9 @@ use ricochet::log::{
 };
 use ricochet::sim::{MaterialOverride, Simulation};
 
-/// One message, as read back.
-#[derive(Clone, Debug, PartialEq, Eq)]
-struct Msg {
-    topic: String,
-    channel: u16,
-    sequence: u32,
-    log_time: u64,
-    publish_time: u64,
-    data: Vec<u8>,
-}
-
-/// Every message of `bytes`, read with `mcap::MessageStream`; panics on any error.
-fn messages(bytes: &[u8]) -> Vec<Msg> {
-    mcap::MessageStream::new(bytes)
-        .unwrap()
-        .map(|m| {
-            let m = m.unwrap();
-            Msg {
-                topic: m.channel.topic.clone(),
-                channel: m.channel.id,
-                sequence: m.sequence,
-                log_time: m.log_time,
-                publish_time: m.publish_time,
-                data: m.data.into_owned(),
-            }
-        })
-        .collect()
-}
-
-/// Fails on any chunk without messages, found two ways: the summary's chunk indexes (a
-/// message index for some channel, and a time range that is its messages'), and the chunk
-/// records read linearly (each holds a message record).
-fn assert_every_chunk_has_messages(bytes: &[u8]) {
-    let summary = mcap::Summary::read(bytes).unwrap().expect("a summary");
-    for index in &summary.chunk_indexes {
-        assert!(
-            !index.message_index_offsets.is_empty(),
-            "chunk at {} has no message index",
-            index.chunk_start_offset
-        );
-        let times: Vec<u64> = (summary.stream_chunk(bytes, index).unwrap())
-            .map(|m| m.unwrap().log_time)
-            .collect();
-        assert!(
-            !times.is_empty(),
-            "chunk at {} holds no message",
-            index.chunk_start_offset
-        );
-        let (min, max) = (times.iter().min().unwrap(), times.iter().max().unwrap());
-        assert_eq!(
-            (index.message_start_time, index.message_end_time),
-            (*min, *max),
-            "chunk at {}: its time range is not its messages'",
-            index.chunk_start_offset
-        );
-    }
-    let mut chunks = 0;
-    for record in mcap::read::LinearReader::new(bytes).unwrap() {
-        if let Record::Chunk { header, data } = record.unwrap() {
-            chunks += 1;
-            let has_message = mcap::read::ChunkReader::new(header, &data)
-                .unwrap()
-                .any(|r| matches!(r.unwrap(), Record::Message { .. }));
-            assert!(has_message, "a chunk record without a message record");
-        }
-    }
-    assert_eq!(chunks, summary.chunk_indexes.len());
-}
+#[path = "common/mcap_check.rs"]
+mod mcap_check;
+use mcap_check::{Msg, assert_every_chunk_has_messages, messages};
 
 /// The log of `scenes/bouncing_ball.toml` up to `t_end`, written by the library with
 /// `options`.
@@ -211,6 +146,23 @@ fn sweep_cuts(original: &[u8], lz4: bool) {
         "last chunk at {start}: {at_start} messages before it, up to {best} with a cut inside it"
     );
     assert!(best > at_start);
+
+    // The same chunk with the placeholder header mcap writes when it opens a chunk and
+    // fills in when it closes it: what a writer killed while writing the chunk out leaves.
+    let mut placeholder = original.to_vec();
+    placeholder[start + 1..start + 9].copy_from_slice(&u64::MAX.to_le_bytes());
+    placeholder[start + 9..start + 25].fill(0);
+    placeholder[start + 25..start + 37].fill(0xFF);
+    let name = u32::from_le_bytes(placeholder[start + 37..start + 41].try_into().unwrap());
+    let compressed_size = start + 41 + name as usize;
+    placeholder[compressed_size..compressed_size + 8].fill(0xFF);
+    let mut previous = at_start;
+    for cut in (start..start + last.chunk_length as usize).step_by(7) {
+        let (n, _, _) = check_cut(&placeholder, &all, cut);
+        assert!(n >= previous, "cut {cut}: {n} < {previous}");
+        previous = n;
+    }
+    assert_eq!(previous, best);
 }
 
 #[test]

@@ -298,7 +298,7 @@ fn salvage(record: &[u8]) -> Vec<Record<'static>> {
     } else {
         // Uncompressed chunks, and zstd ones with the `zstd` feature: mcap's streaming
         // reader yields each record as soon as its bytes are there.
-        records_in(record, LinearReaderOptions::default()).0
+        records_in(&chunk.reframed(), LinearReaderOptions::default()).0
     }
 }
 
@@ -338,9 +338,11 @@ fn decompressed_limit(compressed: usize) -> usize {
     compressed.saturating_mul(256).max(64 << 20)
 }
 
-/// The start of a chunk record [MCAP, §Chunk]: its header fields and its compressed
-/// records as far as the bytes go.
+/// The start of a chunk record [MCAP, §Chunk]: its header and its compressed records as
+/// far as the bytes go.
 struct ChunkStart<'a> {
+    /// The record up to its compressed records: opcode, length, header fields.
+    head: &'a [u8],
     /// The compression, e.g. `lz4`; empty if none.
     compression: &'a [u8],
     /// The compressed records, cut where the bytes end.
@@ -357,11 +359,26 @@ impl<'a> ChunkStart<'a> {
         let n = r.u32()?;
         let compression = r.take(usize::try_from(n).ok()?)?;
         let compressed_size = r.u64()?;
+        let head = &record[..record.len() - r.0.len()];
         let records = r.take_up_to(usize::try_from(compressed_size).unwrap_or(usize::MAX));
         Some(ChunkStart {
+            head,
             compression,
             records,
         })
+    }
+
+    /// The chunk record holding only the compressed records that are there: its length
+    /// and compressed size set to match them. (mcap writes `0xFF…` in both when it opens a
+    /// chunk and the real values when it closes it; a writer killed in between leaves the
+    /// placeholders, which mcap's reader refuses.)
+    fn reframed(&self) -> Vec<u8> {
+        let mut bytes = [self.head, self.records].concat();
+        let length = (bytes.len() - RECORD_PREFIX) as u64;
+        bytes[1..RECORD_PREFIX].copy_from_slice(&length.to_le_bytes());
+        let n = self.head.len();
+        bytes[n - 8..n].copy_from_slice(&(self.records.len() as u64).to_le_bytes());
+        bytes
     }
 }
 
