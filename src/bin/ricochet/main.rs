@@ -9,6 +9,7 @@ mod check;
 mod impact;
 mod inspect;
 mod regions;
+mod repair;
 mod run;
 mod sweep;
 
@@ -30,6 +31,8 @@ enum Command {
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
+    /// Copy an MCAP log cut short (its writer killed) into a finished one that every reader opens.
+    Repair(repair::Args),
     /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
     /// of it, or merge the shards.
     Sweep(sweep::Args),
@@ -46,6 +49,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args),
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Repair(args) => repair::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Regions(args) => regions::run(args),
         Command::Bench(args) => bench::run(args),
