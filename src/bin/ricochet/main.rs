@@ -28,6 +28,11 @@ enum Command {
     /// Validate a scene and print its coordinates, initial state, mass matrix and energies as JSON.
     Check(check::Args),
     /// Simulate a scene, write its MCAP log, print the impacts and the energy audit.
+    ///
+    /// Exit status: 0 when the run reached its end time (or stopped on an accumulation of
+    /// impacts), 1 when it failed, 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
+    /// 129 by SIGHUP. The first signal stops the run at its next step and finishes its log;
+    /// a second one exits at once.
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
