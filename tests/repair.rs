@@ -15,7 +15,8 @@
 //! - ids, order, metadata and attachments of a foreign file are kept; schemas and
 //!   channels after the last message, or in a file without messages, are kept too;
 //! - a tail of zeros (a power loss) stops the reading where it starts;
-//! - empty, garbage, magic-only inputs are errors.
+//! - empty, garbage, magic-only inputs are errors; a malformed attachment record is an
+//!   unreadable record, not a panic.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -530,4 +531,40 @@ fn what_is_not_mcap_is_an_error() {
     assert_eq!(report.end, InputEnd::BetweenRecords);
     assert_eq!(report.messages, 0);
     assert!(mcap::Summary::read(&fixed).unwrap().is_some());
+}
+
+/// An attachment record too short to hold its CRC (on which mcap 0.26's parser panics)
+/// is an unreadable record, or, first in the file, no header.
+#[test]
+fn a_short_attachment_record_is_unreadable() {
+    let mut body = Vec::new();
+    body.extend_from_slice(&[0; 16]);
+    for field in [&b"a"[..], b"b"] {
+        body.extend_from_slice(&(field.len() as u32).to_le_bytes());
+        body.extend_from_slice(field);
+    }
+    body.extend_from_slice(&0u64.to_le_bytes());
+    let mut attachment = vec![0x09];
+    attachment.extend_from_slice(&(body.len() as u64).to_le_bytes());
+    attachment.extend_from_slice(&body);
+
+    let original = old_style_file(1);
+    let header = header_end(&original);
+    let mut bytes = original[..header].to_vec();
+    bytes.extend_from_slice(&attachment);
+    let (_, report) = repair_bytes(&bytes).unwrap();
+    assert_eq!(
+        report.end,
+        InputEnd::Unreadable {
+            error: "attachment record too short".into()
+        }
+    );
+    assert_eq!(report.stopped_at, header as u64);
+
+    let mut first = original[..8].to_vec();
+    first.extend_from_slice(&attachment);
+    assert!(matches!(
+        repair_bytes(&first),
+        Err(LogError::NotMcap { .. })
+    ));
 }

@@ -117,8 +117,10 @@ impl Reading<'_> {
             return ControlFlow::Continue(());
         }
         if self.header.is_none() {
-            return match mcap::parse_record(opcode, body) {
-                Ok(Record::Header(h)) if opcode == op::HEADER => {
+            // (The opcode first: mcap's parser can panic on a short attachment record.)
+            let header = (opcode == op::HEADER).then(|| mcap::parse_record(opcode, body));
+            return match header {
+                Some(Ok(Record::Header(h))) => {
                     self.header = Some(h);
                     ControlFlow::Continue(())
                 }
