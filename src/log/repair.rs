@@ -56,6 +56,13 @@ pub enum InputEnd {
     },
 }
 
+impl InputEnd {
+    /// Whether the whole data section was read: nothing was lost.
+    pub fn is_complete(&self) -> bool {
+        matches!(self, InputEnd::Complete | InputEnd::SummaryDamaged { .. })
+    }
+}
+
 impl fmt::Display for InputEnd {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -110,10 +117,7 @@ pub struct RepairReport {
 impl RepairReport {
     /// Whether the whole data section of the input was read (nothing lost).
     pub fn is_complete(&self) -> bool {
-        matches!(
-            self.end,
-            InputEnd::Complete | InputEnd::SummaryDamaged { .. }
-        )
+        self.end.is_complete()
     }
 }
 
@@ -135,6 +139,10 @@ impl RepairReport {
 ///   sequence, from the bytes present (liblz4's own decoder would stop at the last
 ///   complete LZ4 block, i.e. usually keep nothing of a torn chunk);
 /// - zstd chunks (crate feature `zstd`): what `mcap`'s streaming decoder yields.
+///
+/// (A ricochet run killed while it logs usually leaves only the opened chunk's header: the
+/// LZ4 encoder holds a block back until it is full, i.e. until the chunk is closed. The
+/// salvage counts when a chunk was being written out: a full disk, a power loss.)
 ///
 /// **Not recovered**: anything from the first record that cannot be read on (the
 /// linear reading stops there, even if whole records follow a damaged one); the part of a
@@ -159,6 +167,9 @@ impl RepairReport {
 /// Errors: [`LogError::NotMcap`] when `input` is not an MCAP file (empty, no magic, no
 /// whole header record); [`LogError::Mcap`] when writing `output` fails.
 ///
+/// Cost: `input` is read twice (a survey, then the copy), one chunk decompressed at a
+/// time; the output is written as it goes.
+///
 /// ```
 /// use ricochet::log::{InputEnd, LogOptions, LogWriter, repair_bytes};
 /// # fn main() -> Result<(), ricochet::log::LogError> {
@@ -167,6 +178,7 @@ impl RepairReport {
 /// let whole = log.finish()?.into_inner();
 /// // Cut inside the summary section: nothing of the data is lost.
 /// let (fixed, report) = repair_bytes(&whole[..whole.len() - 30])?;
+/// assert!(matches!(report.end, InputEnd::SummaryDamaged { .. }));
 /// assert!(report.is_complete() && report.metadata == 1);
 /// assert!(mcap::Summary::read(&fixed).is_ok());
 /// # Ok(())
@@ -186,7 +198,11 @@ pub fn repair<W: Write + Seek>(input: &[u8], output: W) -> Result<RepairReport, 
     let counts = copy.finish()?;
     let unused_bytes = (input.len() as u64).saturating_sub(scanned.stopped_at);
     Ok(RepairReport {
-        unused_bytes: if scanned.complete() { 0 } else { unused_bytes },
+        unused_bytes: if scanned.end.is_complete() {
+            0
+        } else {
+            unused_bytes
+        },
         end: scanned.end,
         stopped_at: scanned.stopped_at,
         messages: counts.messages,

@@ -21,16 +21,6 @@ pub(super) struct Scanned {
     pub(super) stopped_at: u64,
 }
 
-impl Scanned {
-    /// Whether the whole data section was read.
-    pub(super) fn complete(&self) -> bool {
-        matches!(
-            self.end,
-            InputEnd::Complete | InputEnd::SummaryDamaged { .. }
-        )
-    }
-}
-
 /// Reads `input` from its start and hands every record to keep (schema, channel, message,
 /// metadata, attachment) to `visit`, in file order, the records of a chunk in their order
 /// in it; the flag is `true` for those salvaged from the chunk at which reading stopped.
@@ -63,8 +53,7 @@ pub(super) fn scan(
     // 2. Why reading stopped, and where.
     let (header, end, stopped_at) = reading.ending(fed)?;
     // 3. The records of the chunk at which reading stopped, as far as they decode.
-    let complete = matches!(end, InputEnd::Complete | InputEnd::SummaryDamaged { .. });
-    if !complete && input.get(stopped_at) == Some(&op::CHUNK) {
+    if !end.is_complete() && input.get(stopped_at) == Some(&op::CHUNK) {
         let length = record_length(&input[stopped_at..]).unwrap_or(u64::MAX);
         let end_of_record = (stopped_at as u64)
             .saturating_add(RECORD_PREFIX as u64)
@@ -289,7 +278,7 @@ fn chunk_records(record: &[u8]) -> Result<Vec<Record<'static>>, String> {
 }
 
 /// The records to keep of the chunk record `record` (opcode to end, cut short or damaged),
-/// as far as they decode (see [`repair`]).
+/// as far as they decode (see [`repair`](super::repair)).
 fn salvage(record: &[u8]) -> Vec<Record<'static>> {
     let Some(chunk) = ChunkStart::parse(record) else {
         return vec![];
