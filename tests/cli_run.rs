@@ -17,8 +17,8 @@
 //!   folder that does not exist) gives a clear message naming the culprit, a non-zero exit
 //!   and no log;
 //! - `ricochet inspect` on the log prints the same impacts and the audit;
-//! - a real SIGINT stops a long run with exit code 130 and a complete log whose audit says
-//!   `interrupted`.
+//! - a real SIGINT stops a long run with exit code 130 (SIGTERM 143, SIGHUP 129) and a
+//!   complete log whose audit says `interrupted`, which `ricochet inspect` reads.
 
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
@@ -744,15 +744,34 @@ fn inspect_prints_the_same_impacts_and_the_audit() {
 }
 
 // ---------------------------------------------------------------------------------------
-// Ctrl-C
+// Ctrl-C, SIGTERM, SIGHUP
 
 /// A real SIGINT to a long run: exit code 130, and a finished log whose audit says it
-/// was interrupted. The scene is `pendulum_wall` with `e = 1` (elastic, so that it never
-/// comes to rest: with its own e = 0.7 it stops on an accumulation at t ≈ 28 s, within
-/// 30 ms) and `t_end = 10⁶` s (about a quarter of an hour of wall time).
+/// was interrupted.
 #[test]
 fn sigint_stops_a_long_run_with_a_complete_log() {
-    let dir = TempDir::new("sigint");
+    signal_stops_a_long_run_with_a_complete_log("INT", 130);
+}
+
+/// SIGTERM (`kill`, a service manager): the same, with exit code 143.
+#[test]
+fn sigterm_stops_a_long_run_with_a_complete_log() {
+    signal_stops_a_long_run_with_a_complete_log("TERM", 143);
+}
+
+/// SIGHUP (the terminal closed): the same, with exit code 129.
+#[test]
+fn sighup_stops_a_long_run_with_a_complete_log() {
+    signal_stops_a_long_run_with_a_complete_log("HUP", 129);
+}
+
+/// Sends `SIG<signal>` to a long run: it exits with `code`, leaving a finished log whose
+/// audit says it was interrupted, which `ricochet inspect` reads. The scene is
+/// `pendulum_wall` with `e = 1` (elastic, so that it never comes to rest: with its own
+/// e = 0.7 it stops on an accumulation at t ≈ 28 s, within 30 ms) and `t_end = 10⁶` s
+/// (about a quarter of an hour of wall time).
+fn signal_stops_a_long_run_with_a_complete_log(signal: &str, code: i32) {
+    let dir = TempDir::new(&format!("sig{signal}"));
     let scene = scene_path("pendulum_wall");
     let log_path = dir.join("long.mcap");
     let stdout_path = dir.join("stdout.txt");
@@ -786,7 +805,7 @@ fn sigint_stops_a_long_run_with_a_complete_log() {
     }
     let before = std::fs::metadata(&log_path).unwrap().len();
     let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
@@ -799,13 +818,13 @@ fn sigint_stops_a_long_run_with_a_complete_log() {
         }
         if start.elapsed() > Duration::from_secs(60) {
             let _ = child.kill();
-            panic!("no exit 60 s after SIGINT");
+            panic!("no exit 60 s after SIG{signal}");
         }
         std::thread::sleep(Duration::from_millis(10));
     };
     let stdout = std::fs::read_to_string(&stdout_path).unwrap();
     let stderr = std::fs::read_to_string(&stderr_path).unwrap();
-    assert_eq!(status.code(), Some(130), "{status:?}\n{stdout}\n{stderr}");
+    assert_eq!(status.code(), Some(code), "{status:?}\n{stdout}\n{stderr}");
     assert_no_progress_bar(&stderr);
     let first = stdout.lines().next().unwrap();
     assert!(
@@ -834,6 +853,10 @@ fn sigint_stops_a_long_run_with_a_complete_log() {
     );
     // Elastic and frictionless in the normal direction: the energy stays put.
     assert!((audit.energy_final - audit.energy_initial).abs() < 1e-5);
+    let inspect = ricochet(dir.path(), &["inspect", "long.mcap"]);
+    let inspect = text(&inspect.stdout);
+    assert!(inspect.contains("stop reason"), "{inspect}");
+    assert!(inspect.contains("interrupted"), "{inspect}");
 }
 
 /// The library alone (no log) gives the same counters as the command: the log does not

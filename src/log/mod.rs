@@ -25,6 +25,7 @@
 //!
 //! - [`LogWriter`] writes a log (see its docs for finishing and interruption);
 //! - [`read`] reads one back, as far as it goes;
+//! - [`repair()`] turns a log cut short (a killed writer) into a finished MCAP file;
 //! - [`draw`] turns parry2d shapes and impacts into Foxglove scene entities;
 //! - [`RunLogger`] is the simulation's observer that writes a run.
 
@@ -34,6 +35,7 @@ pub mod draw;
 pub mod foxglove;
 mod reader;
 mod records;
+mod repair;
 mod run;
 pub mod schemas;
 mod sink;
@@ -45,6 +47,7 @@ pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
     StateRecord,
 };
+pub use repair::{InputEnd, RepairReport, repair, repair_bytes};
 pub use run::RunLogger;
 pub use schemas::{FORMAT_VERSION, Topic};
 pub use writer::{Compression, LogOptions, LogWriter};
@@ -131,6 +134,13 @@ pub enum LogError {
     UnsupportedShape {
         /// parry2d's name of the shape type.
         shape: String,
+    },
+    /// Bytes that are not an MCAP file, or not enough of one to repair (see
+    /// [`repair()`]).
+    #[error("not an MCAP file: {reason}")]
+    NotMcap {
+        /// What is missing, e.g. `it does not start with the MCAP magic bytes`.
+        reason: &'static str,
     },
     /// An error of the MCAP layer: I/O, or a file that is not MCAP.
     #[error("MCAP error")]

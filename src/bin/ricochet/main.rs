@@ -9,6 +9,7 @@ mod check;
 mod impact;
 mod inspect;
 mod regions;
+mod repair;
 mod run;
 mod sweep;
 
@@ -27,9 +28,16 @@ enum Command {
     /// Validate a scene and print its coordinates, initial state, mass matrix and energies as JSON.
     Check(check::Args),
     /// Simulate a scene, write its MCAP log, print the impacts and the energy audit.
+    ///
+    /// Exit status: 0 when the run reached its end time (or stopped on an accumulation of
+    /// impacts), 1 when it failed, 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
+    /// 129 by SIGHUP. The first signal stops the run at its next step and finishes its log;
+    /// a second one exits at once.
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
+    /// Copy an MCAP log cut short (its writer killed) into a finished one that every reader opens.
+    Repair(repair::Args),
     /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
     /// of it, or merge the shards.
     Sweep(sweep::Args),
@@ -46,6 +54,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args),
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Repair(args) => repair::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Regions(args) => regions::run(args),
         Command::Bench(args) => bench::run(args),

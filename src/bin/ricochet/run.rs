@@ -5,7 +5,7 @@ use std::io::{IsTerminal, Seek, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -201,7 +201,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     };
 
     let interrupt = Arc::new(AtomicBool::new(false));
-    install_interrupt(&interrupt)?;
+    let signal = Arc::new(AtomicUsize::new(0));
+    install_interrupt(&interrupt, &signal)?;
     let summary = match &mut runner {
         Runner::EventDriven(sim) => sim.run(&scene.initial, &mut terminal, Some(&interrupt)),
         Runner::MoreauJean(mj) => mj.run(&scene.initial, &mut terminal, Some(&interrupt)),
@@ -215,10 +216,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .finish(&summary)
         .with_context(|| format!("cannot finish the log {}", output.display()))?;
 
-    report(&scene.name, &output, &summary, &rows, args.quiet)?;
+    let printed = report(&scene.name, &output, &summary, &rows, args.quiet);
+    let signal = signal.load(Ordering::SeqCst);
+    match printed {
+        // After SIGHUP the terminal is gone: the log is finished, the report is not needed.
+        Err(_) if signal == SIGHUP => {}
+        printed => printed?,
+    }
     Ok(match summary.stop {
         StopReason::EndTime | StopReason::Accumulation { .. } => ExitCode::SUCCESS,
-        StopReason::Interrupted { .. } => ExitCode::from(130),
+        StopReason::Interrupted { .. } => ExitCode::from(interrupted_status(signal)),
         StopReason::Failed(_) => ExitCode::FAILURE,
     })
 }
@@ -231,19 +238,44 @@ enum Runner<'m> {
     MoreauJean(Box<MoreauJean<'m>>),
 }
 
-/// On a first Ctrl-C the run stops at the next step and finishes its log; a second one
-/// terminates the process at once.
-fn install_interrupt(flag: &Arc<AtomicBool>) -> anyhow::Result<()> {
+/// The signal numbers of SIGINT (Ctrl-C), SIGTERM (`kill`, a service manager stopping the
+/// run) and SIGHUP (the terminal closed), which stop a run; POSIX fixes them.
+const SIGINT: usize = 2;
+const SIGTERM: usize = 15;
+const SIGHUP: usize = 1;
+#[cfg(unix)]
+const _: () = assert!(
+    SIGINT as i32 == signal_hook::consts::SIGINT
+        && SIGTERM as i32 == signal_hook::consts::SIGTERM
+        && SIGHUP as i32 == signal_hook::consts::SIGHUP
+);
+
+/// The exit status of a run stopped by `signal` (0 if none was recorded): 128 + its number,
+/// the shell's convention (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP).
+fn interrupted_status(signal: usize) -> u8 {
+    let signal = if signal == 0 { SIGINT } else { signal };
+    u8::try_from(128 + signal).unwrap_or(130)
+}
+
+/// On a first SIGINT (Ctrl-C), SIGTERM or SIGHUP the run stops at its next step and
+/// finishes its log, and `signal` records which came; a second one (of any of the three)
+/// ends the process at once, with 128 + its number.
+fn install_interrupt(flag: &Arc<AtomicBool>, signal: &Arc<AtomicUsize>) -> anyhow::Result<()> {
     #[cfg(unix)]
     {
-        use signal_hook::consts::SIGINT;
         use signal_hook::flag;
-        flag::register_conditional_shutdown(SIGINT, 130, Arc::clone(flag))
-            .context("cannot install the Ctrl-C handler")?;
-        flag::register(SIGINT, Arc::clone(flag)).context("cannot install the Ctrl-C handler")?;
+        for (number, name) in [(SIGINT, "Ctrl-C"), (SIGTERM, "SIGTERM"), (SIGHUP, "SIGHUP")] {
+            let context = || format!("cannot install the {name} handler");
+            let sig = number as i32;
+            // In this order: a handler sees the flag as the previous signal left it.
+            flag::register_conditional_shutdown(sig, 128 + sig, Arc::clone(flag))
+                .with_context(context)?;
+            flag::register_usize(sig, Arc::clone(signal), number).with_context(context)?;
+            flag::register(sig, Arc::clone(flag)).with_context(context)?;
+        }
     }
     #[cfg(not(unix))]
-    let _ = flag;
+    let _ = (flag, signal);
     Ok(())
 }
 
