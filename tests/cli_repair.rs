@@ -169,7 +169,7 @@ fn a_killed_run_is_repaired() {
         all.len()
     );
     assert!(stdout.contains(&format!(
-        "kept: {} messages, 5 schemas, 5 channels",
+        "kept: {} messages, 5 schemas, 6 channels",
         all.len()
     )));
     assert_every_chunk_has_messages(&fixed);

@@ -46,7 +46,7 @@ fn ball_log(t_end: f64, options: LogOptions) -> Vec<u8> {
         &s.model,
         (&s.name, &s.text),
         (&s.settings, &overrides),
-        s.initial.t,
+        &s.initial,
         sim.scales().gap_tol,
     )
     .unwrap();
@@ -219,8 +219,10 @@ fn a_complete_log_repairs_to_the_same_log_and_twice_to_the_same_bytes() {
         (0, 0, 0)
     );
     assert_eq!(
+        // Format 2: five schemas (`/geometry` and `/scene` share one), six channels, and
+        // the ricochet, scene, settings and audit records.
         (report.schemas, report.channels, report.metadata),
-        (5, 5, 3)
+        (5, 6, 4)
     );
     assert_eq!(messages(&fixed), messages(&original));
     assert_every_chunk_has_messages(&fixed);

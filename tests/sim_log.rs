@@ -26,8 +26,8 @@
 //! - a writer that was never finished (a killed process) leaves a file that reads back up
 //!   to its last flush.
 
-#[path = "common/chunks.rs"]
-mod chunks;
+#[path = "common/mcap_check.rs"]
+mod mcap_check;
 #[path = "common/shared_file.rs"]
 mod shared_file;
 
@@ -331,7 +331,7 @@ fn topics_schemas_and_counts_follow_the_run() {
             .map(|m| m.name.as_str())
             .collect();
         assert_eq!(names, ["ricochet", "scene", "settings", "audit"], "{name}");
-        chunks::assert_every_chunk_has_messages(&run.bytes);
+        mcap_check::assert_every_chunk_has_messages(&run.bytes);
     }
 }
 
@@ -415,7 +415,7 @@ fn every_bundled_scene_logs_the_whole_mechanism_at_any_time() {
     for name in &scenes {
         let run = run_scene(name);
         let model = &run.scene.model;
-        chunks::assert_every_chunk_has_messages(&run.bytes);
+        mcap_check::assert_every_chunk_has_messages(&run.bytes);
         let all = messages(&run.bytes);
         for (topic, _, data) in &all {
             // JSON topics are validated above; here they must at least parse.

@@ -179,7 +179,8 @@ impl RepairReport {
 /// // Cut inside the summary section: nothing of the data is lost.
 /// let (fixed, report) = repair_bytes(&whole[..whole.len() - 30])?;
 /// assert!(matches!(report.end, InputEnd::SummaryDamaged { .. }));
-/// assert!(report.is_complete() && report.metadata == 1);
+/// // The `ricochet` (format version) and `scene` records.
+/// assert!(report.is_complete() && report.metadata == 2);
 /// assert!(mcap::Summary::read(&fixed).is_ok());
 /// # Ok(())
 /// # }
