@@ -1189,3 +1189,48 @@ fn inspect_prints_the_summary_of_a_run() {
     assert!(stdout.contains("truncated"), "{stdout}");
     assert!(stdout.contains("no audit"), "{stdout}");
 }
+
+/// The JSON schemas of ricochet's topics use only what Foxglove Studio 1.48 parses into
+/// its datatypes (`parseJsonSchema` of `@foxglove/studio-base` 1.48, transcribed): every
+/// property has one `type`, a string among boolean, string, number, integer, object
+/// (itself parsed the same way) and array (whose items have one such type). A field that
+/// may be a number or null (`"type": ["number", "null"]`) makes Studio drop the whole topic
+/// ("Unsupported type"), which a first draft of format 2 did to `/impacts`.
+#[test]
+fn ricochet_schemas_are_what_foxglove_studio_parses() {
+    fn object(schema: &Value, path: &str) {
+        assert_eq!(schema["type"], "object", "{path}: not an object");
+        for (name, field) in schema["properties"].as_object().unwrap() {
+            let path = format!("{path}.{name}");
+            if let Some(one_of) = field.get("oneOf") {
+                let constants = one_of.as_array().unwrap();
+                assert!(constants.iter().all(|c| c["const"].is_number()), "{path}");
+                continue;
+            }
+            match field["type"].as_str() {
+                Some("boolean" | "number" | "integer") => {}
+                Some("string") => assert!(
+                    field.get("contentEncoding").is_none_or(|e| e == "base64"),
+                    "{path}"
+                ),
+                Some("object") => object(field, &path),
+                Some("array") => match field["items"]["type"].as_str() {
+                    Some("boolean" | "string" | "number" | "integer") => {}
+                    Some("object") => object(&field["items"], &format!("{path}[]")),
+                    other => panic!("{path}: array items of type {other:?}"),
+                },
+                _ => panic!("{path}: type {} is not one Studio parses", field["type"]),
+            }
+        }
+    }
+    for topic in Topic::ALL.into_iter().filter(|t| t.is_json()) {
+        let schema: Value = serde_json::from_slice(&topic.schema()).unwrap();
+        object(&schema, topic.name());
+    }
+    // The check fails where Studio fails.
+    let nullable: Value = serde_json::json!({
+        "type": "object",
+        "properties": {"alpha": {"type": ["number", "null"]}}
+    });
+    assert!(std::panic::catch_unwind(|| object(&nullable, "/impacts")).is_err());
+}

@@ -241,9 +241,11 @@ pub struct ImpactRecord {
     pub impact_type: CollisionType,
     /// The sign case 1–5 of `(g, h, p, q)` [P, Table 1].
     pub case: u8,
-    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)] (dimensionless); `None` (JSON `null`) when it is
-    /// not a finite number: an impact without collision (`v_n^A = 0`, Painlevé's paradox)
-    /// has no α.
+    /// `α = v_t^A / |v_n^A|` [P, Eq. (34)] (dimensionless); `None` (absent from the JSON)
+    /// when it is not a finite number: an impact without approach speed (`v_n^A = 0`) has
+    /// no α. (Absent, not `null`: Foxglove Studio 1.48 refuses a JSON schema whose field
+    /// may be a number or null.)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha: Option<f64>,
     /// `W = J M⁻¹ Jᵀ` in the contact frame [P, Eq. (20)].
     pub w: ImpactMatrix,
