@@ -922,3 +922,27 @@ fn painleve_paradox_is_reported_on_the_command_line() {
             .all(|i| i.cause.name() != "without_collision")
     );
 }
+
+/// Without the crate feature `live`, `--live` fails at once with the way to get it, and
+/// leaves no log; its options need `--live`.
+#[cfg(not(feature = "live"))]
+#[test]
+fn live_needs_the_live_feature() {
+    let dir = TempDir::new("live_feature");
+    let scene = scene_path("bouncing_ball");
+    let out = ricochet(dir.path(), &["run", scene.to_str().unwrap(), "--live"]);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("built without live view")
+            && stderr.contains("cargo build --release --features live"),
+        "{stderr}"
+    );
+    assert!(dir.logs().is_empty(), "{:?}", dir.logs());
+    let out = ricochet(
+        dir.path(),
+        &["run", scene.to_str().unwrap(), "--speed", "2"],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("--live"));
+}

@@ -33,6 +33,8 @@ use std::path::PathBuf;
 
 pub mod draw;
 pub mod foxglove;
+#[cfg(feature = "live")]
+mod live;
 mod reader;
 mod records;
 mod repair;
@@ -42,13 +44,15 @@ mod sink;
 mod writer;
 
 pub use foxglove::{FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate};
+#[cfg(feature = "live")]
+pub use live::{LiveOptions, LiveView};
 pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
 pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
     StateRecord,
 };
 pub use repair::{InputEnd, RepairReport, repair, repair_bytes};
-pub use run::RunLogger;
+pub use run::{RunLogger, Tap};
 pub use schemas::{FORMAT_VERSION, Topic};
 pub use writer::{Compression, LogOptions, LogWriter};
 
@@ -128,6 +132,14 @@ pub enum LogError {
         what: String,
         /// The value found.
         value: String,
+    },
+    /// The live view (`ricochet run --live`) could not start.
+    #[error("cannot serve the live view on {address}: {message}")]
+    Live {
+        /// The address asked for, `host:port`.
+        address: String,
+        /// What went wrong.
+        message: String,
     },
     /// A shape that [`draw::add_shape`] cannot draw.
     #[error("cannot draw a parry2d {shape} shape")]

@@ -8,9 +8,10 @@ use serde::Serialize;
 
 use super::draw::{self, ArrowScale, ArrowStyle, DrawStyle, ShapeDrawing, ViewTracker};
 use super::foxglove::{Color, about_z, rgba, timestamp, vector3};
+use super::writer::log_message;
 use super::{
     Audit, ContactMode, ContactState, Counters, Energy, FrameTransforms, ImpactCause, ImpactRecord,
-    LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
+    Log, LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
 };
 use crate::math::{Pose, Real, Vec2};
 use crate::model::Model;
@@ -33,6 +34,23 @@ const PALETTE: [(f64, f64, f64); 6] = [
 
 /// Colour of the obstacles.
 const OBSTACLE: Color = rgba(0.6, 0.6, 0.6, 1.0);
+
+/// Receives what a [`RunLogger`] writes, message by message, as it writes it: a second
+/// destination of the run, such as the live view (`ricochet run --live`, feature `live`).
+/// Publishing cannot fail the run; a tap reports its own trouble.
+pub trait Tap: Send {
+    /// The drawing of every body and obstacle (`/geometry`), at the start of the run, or at
+    /// once when the tap is attached later.
+    fn geometry(&mut self, t: Real, update: &SceneUpdate);
+    /// A sample: its `/state` record and its `/tf` transforms.
+    fn sample(&mut self, state: &StateRecord, transforms: &FrameTransforms);
+    /// An impact: its ledger entry and its drawing (`/scene`).
+    fn impact(&mut self, impact: &ImpactRecord, drawing: &SceneUpdate);
+    /// A `/log` message.
+    fn log(&mut self, log: &Log);
+    /// The run has ended and its log is finished.
+    fn finish(&mut self) {}
+}
 
 /// Writes a run to an MCAP log as it goes: the bodies and obstacles on `/geometry` at the
 /// start; `/state` and `/tf` at each sample; `/impacts`, an impulse arrow on `/scene` and a
@@ -58,6 +76,10 @@ pub struct RunLogger<W: Write + Seek + Send + 'static> {
     /// The `/tf` message, updated in place at each sample: a transform per body, then
     /// `view → world`.
     tf: FrameTransforms,
+    /// The `/geometry` message, kept for a tap attached later.
+    geometry: (Real, SceneUpdate),
+    /// A second destination of what is written.
+    tap: Option<Box<dyn Tap>>,
 }
 
 impl<W: Write + Seek + Send + 'static> RunLogger<W> {
@@ -106,7 +128,8 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
             .iter()
             .map(|p| (side(p.a), side(p.b)))
             .collect();
-        writer.geometry(t0, &geometry(model, t0)?)?;
+        let drawing = geometry(model, t0)?;
+        writer.geometry(t0, &drawing)?;
 
         // The mechanism at the start: its size scales the arrows, its box starts the view.
         let local_boxes: Vec<Aabb> = (0..model.nbody()).map(|k| local_box(model, k)).collect();
@@ -137,7 +160,17 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
             view,
             state,
             tf,
+            geometry: (t0, drawing),
+            tap: None,
         })
+    }
+
+    /// Sends everything written from now on to `tap` as well, starting with the geometry.
+    pub fn with_tap(mut self, mut tap: Box<dyn Tap>) -> Self {
+        let (t0, drawing) = &self.geometry;
+        tap.geometry(*t0, drawing);
+        self.tap = Some(tap);
+        self
     }
 
     /// Ends the log: writes the energy audit of `summary` and finishes the file.
@@ -168,7 +201,11 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
             },
         );
         self.writer.audit(&audit)?;
-        self.writer.finish()
+        let inner = self.writer.finish()?;
+        if let Some(tap) = &mut self.tap {
+            tap.finish();
+        }
+        Ok(inner)
     }
 
     /// Flushes what is written so far (the log stays readable if the process dies).
@@ -304,6 +341,9 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
             tf.rotation = Some(about_z(angle));
         }
         self.writer.transforms(s.t, &self.tf)?;
+        if let Some(tap) = &mut self.tap {
+            tap.sample(&self.state, &self.tf);
+        }
         Ok(())
     }
 
@@ -351,16 +391,17 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
         self.writer.impact(&record)?;
         let length =
             (self.arrow_scale).length(record.impulse().x.hypot(record.impulse().y), &self.arrow);
-        let arrow = draw::impulse_arrow(&record, length, &self.arrow)?;
-        self.writer.scene_update(
-            ev.t,
-            &SceneUpdate {
-                deletions: vec![],
-                entities: vec![arrow],
-            },
-        )?;
-        self.writer
-            .log(ev.t, LogLevel::Info, &impact_line(&record))?;
+        let drawing = SceneUpdate {
+            deletions: vec![],
+            entities: vec![draw::impulse_arrow(&record, length, &self.arrow)?],
+        };
+        self.writer.scene_update(ev.t, &drawing)?;
+        let line = log_message(ev.t, LogLevel::Info, &impact_line(&record))?;
+        self.writer.log_message(&line)?;
+        if let Some(tap) = &mut self.tap {
+            tap.impact(&record, &drawing);
+            tap.log(&line);
+        }
         self.impacts += 1;
         Ok(())
     }
@@ -371,7 +412,11 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
             Level::Warning => LogLevel::Warning,
             Level::Error => LogLevel::Error,
         };
-        self.writer.log(t, level, text)?;
+        let log = log_message(t, level, text)?;
+        self.writer.log_message(&log)?;
+        if let Some(tap) = &mut self.tap {
+            tap.log(&log);
+        }
         Ok(())
     }
 }

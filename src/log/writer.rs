@@ -229,15 +229,13 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
 
     /// Writes a text message on `/log` at simulated time `t` (s), from `ricochet`.
     pub fn log(&mut self, t: f64, level: LogLevel, message: &str) -> Result<(), LogError> {
-        let log = Log {
-            timestamp: Some(timestamp(t)?),
-            level: level as i32,
-            message: message.to_owned(),
-            name: "ricochet".to_owned(),
-            file: String::new(),
-            line: 0,
-        };
-        self.write_protobuf(Topic::Log, t, &log)
+        self.log_message(&log_message(t, level, message)?)
+    }
+
+    /// Writes `log` on `/log` at its timestamp.
+    pub fn log_message(&mut self, log: &Log) -> Result<(), LogError> {
+        let t = log.timestamp.as_ref().map_or(0.0, super::foxglove::seconds);
+        self.write_protobuf(Topic::Log, t, log)
     }
 
     /// Closes the current chunk and flushes it to the underlying writer, so that a process
@@ -308,6 +306,18 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
             metadata: map,
         })
     }
+}
+
+/// The `/log` message `message` from `ricochet`, at simulated time `t` (s).
+pub fn log_message(t: f64, level: LogLevel, message: &str) -> Result<Log, LogError> {
+    Ok(Log {
+        timestamp: Some(timestamp(t)?),
+        level: level as i32,
+        message: message.to_owned(),
+        name: "ricochet".to_owned(),
+        file: String::new(),
+        line: 0,
+    })
 }
 
 /// The channel id of `topic`: its position in [`Topic::ALL`], from 1.

@@ -8,6 +8,7 @@ mod bench;
 mod check;
 mod impact;
 mod inspect;
+mod live;
 mod regions;
 mod repair;
 mod run;

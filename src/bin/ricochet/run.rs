@@ -55,6 +55,8 @@ pub struct Args {
     /// Print only the summary line, not the impact table and the audit.
     #[arg(short, long)]
     quiet: bool,
+    #[command(flatten)]
+    live: crate::live::LiveArgs,
 }
 
 /// One row of the impact table.
@@ -174,6 +176,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Runner::EventDriven(sim) => sim.scales().gap_tol,
         Runner::MoreauJean(mj) => mj.scales().gap_tol,
     };
+    let live = crate::live::start(&args.live)?;
     let writer = LogWriter::create(&output, LogOptions::default())?;
     let log = RunLogger::new(
         writer,
@@ -183,6 +186,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         &scene.initial,
         gap_tol,
     )?;
+    let log = match live {
+        Some(tap) => log.with_tap(tap),
+        None => log,
+    };
     let progress = std::io::stderr().is_terminal().then(|| {
         let bar = ProgressBar::new(1000);
         bar.set_style(
