@@ -388,17 +388,12 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
             normal: planar(ev.frame.n),
             tangent: planar(ev.frame.t),
         };
-        self.writer.impact(&record)?;
-        let length =
-            (self.arrow_scale).length(record.impulse().x.hypot(record.impulse().y), &self.arrow);
-        let drawing = SceneUpdate {
-            deletions: vec![],
-            entities: vec![draw::impulse_arrow(&record, length, &self.arrow)?],
-        };
-        self.writer.scene_update(ev.t, &drawing)?;
-        let line = log_message(ev.t, LogLevel::Info, &impact_line(&record))?;
-        self.writer.log_message(&line)?;
+        let impulse = record.impulse();
+        let length = (self.arrow_scale).length(impulse.x.hypot(impulse.y), &self.arrow);
+        self.writer.impact_drawn(&record, (length, self.arrow))?;
         if let Some(tap) = &mut self.tap {
+            let drawing = super::sink::arrow_update(&record, (length, self.arrow))?;
+            let line = log_message(ev.t, LogLevel::Info, &impact_line(&record))?;
             tap.impact(&record, &drawing);
             tap.log(&line);
         }
@@ -423,7 +418,7 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
 
 /// The `/log` line of an impact: `impact #3 rodB/floor: newton, forward_sliding (case 3),
 /// I_n = 0.455 N·s, I_t = -0.0911 N·s, v_s = (0.0714, 0.197) m/s, ΔE = -0.0481 J`.
-fn impact_line(r: &ImpactRecord) -> String {
+pub(super) fn impact_line(r: &ImpactRecord) -> String {
     let s = draw::significant;
     let cause = match r.cause {
         ImpactCause::Collision => String::new(),

@@ -2,11 +2,12 @@
 //! writing them out overlaps with the simulation.
 //!
 //! The simulation thread checks each message (a bad number is reported at once, naming
-//! the field) and puts it in a [`Batch`]: the frequent `/state` and `/tf` samples as
-//! copies of their records, into slots that keep their allocations from one batch to the
-//! next; the rare messages encoded (JSON or protobuf). A full batch goes to the sink
-//! thread, which encodes the samples (`/state` as JSON, `/tf` as protobuf) and writes
-//! every message to the `mcap::Writer` (that compresses a chunk when it is full).
+//! the field) and puts it in a [`Batch`]: the `/state` and `/tf` samples and the impacts
+//! as copies of their records, into slots that keep their allocations from one batch to
+//! the next; the other messages encoded (JSON or protobuf). A full batch goes to the sink
+//! thread, which encodes the samples (`/state` as JSON, `/tf` as protobuf) and the three
+//! messages of an impact (its ledger entry on `/impacts`, its arrow on `/scene`, its line
+//! on `/log`), and writes every message to the `mcap::Writer`.
 //!
 //! The schemas and channels are registered on the sink thread right before the first
 //! message, so that they share its chunk: a chunk that held only schemas and channels
@@ -39,9 +40,12 @@ use mcap::McapError;
 use mcap::records::{MessageHeader, Metadata};
 
 use super::LogError;
-use super::foxglove::{FrameTransforms, append_protobuf};
-use super::records::StateRecord;
+use super::draw::{self, ArrowStyle};
+use super::foxglove::{FrameTransforms, LogLevel, SceneUpdate, append_protobuf};
+use super::records::{ImpactRecord, StateRecord};
+use super::run::impact_line;
 use super::schemas::Topic;
+use super::writer::log_message;
 
 /// Batches that may wait in the channel for the sink thread. A full channel makes the
 /// simulation wait (back-pressure) rather than grow without bound.
@@ -70,6 +74,18 @@ enum Payload {
     /// The record in slot `k` of the batch's `/tf` samples, encoded (protobuf) on the sink
     /// thread.
     Transforms(usize),
+    /// The ledger entry of impact slot `k` (`/impacts`, JSON).
+    Impact(usize),
+    /// The arrow of impact slot `k` (`/scene`, protobuf).
+    Arrow(usize),
+    /// The `/log` line of impact slot `k` (protobuf).
+    ImpactLine(usize),
+}
+
+/// An impact to write: its ledger entry, and the length (m) and style of its arrow.
+struct ImpactSlot {
+    record: ImpactRecord,
+    arrow: (f64, ArrowStyle),
 }
 
 /// Messages in order, with the records and bytes they refer to. Its vectors and the
@@ -85,6 +101,9 @@ pub(super) struct Batch {
     /// `/tf` records; the first `n_transforms` are in use.
     transforms: Vec<FrameTransforms>,
     n_transforms: usize,
+    /// Impacts; the first `n_impacts` are in use.
+    impacts: Vec<ImpactSlot>,
+    n_impacts: usize,
 }
 
 impl Batch {
@@ -93,6 +112,7 @@ impl Batch {
         self.bytes.clear();
         self.n_states = 0;
         self.n_transforms = 0;
+        self.n_impacts = 0;
     }
 
     fn is_full(&self) -> bool {
@@ -107,6 +127,23 @@ impl Batch {
             None => self.states.push(state.clone()),
         }
         self.n_states += 1;
+        k
+    }
+
+    /// A copy of `impact` and its arrow in the next free slot; its index.
+    fn add_impact(&mut self, impact: &ImpactRecord, arrow: (f64, ArrowStyle)) -> usize {
+        let k = self.n_impacts;
+        match self.impacts.get_mut(k) {
+            Some(slot) => {
+                slot.record.clone_from(impact);
+                slot.arrow = arrow;
+            }
+            None => self.impacts.push(ImpactSlot {
+                record: impact.clone(),
+                arrow,
+            }),
+        }
+        self.n_impacts += 1;
         k
     }
 
@@ -291,6 +328,25 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.send_if_full()
     }
 
+    /// Adds an impact (copied; its three messages encoded on the sink thread) with the
+    /// headers of its ledger entry, its arrow and its log line.
+    pub(super) fn push_impact(
+        &mut self,
+        headers: [MessageHeader; 3],
+        impact: &ImpactRecord,
+        arrow: (f64, ArrowStyle),
+    ) -> Result<(), LogError> {
+        self.failure.take()?;
+        let k = self.open.add_impact(impact, arrow);
+        let [ledger, scene, log] = headers;
+        (self.open.messages).extend([
+            (ledger, Payload::Impact(k)),
+            (scene, Payload::Arrow(k)),
+            (log, Payload::ImpactLine(k)),
+        ]);
+        self.send_if_full()
+    }
+
     fn send_if_full(&mut self) -> Result<(), LogError> {
         if self.open.is_full() {
             self.send_batch()?;
@@ -402,6 +458,29 @@ impl<W: Write + Seek> Writing<W> {
                     append_protobuf(&mut self.encoded, Topic::Tf.name(), tf)?;
                     &self.encoded[..]
                 }
+                Payload::Impact(k) => {
+                    self.encoded.clear();
+                    let record = &batch.impacts[k].record;
+                    append_json(&mut self.encoded, Topic::Impacts, record)?;
+                    &self.encoded[..]
+                }
+                Payload::Arrow(k) => {
+                    self.encoded.clear();
+                    let ImpactSlot { record, arrow } = &batch.impacts[k];
+                    append_protobuf(
+                        &mut self.encoded,
+                        Topic::Scene.name(),
+                        &arrow_update(record, *arrow)?,
+                    )?;
+                    &self.encoded[..]
+                }
+                Payload::ImpactLine(k) => {
+                    self.encoded.clear();
+                    let record = &batch.impacts[k].record;
+                    let line = log_message(record.t, LogLevel::Info, &impact_line(record))?;
+                    append_protobuf(&mut self.encoded, Topic::Log.name(), &line)?;
+                    &self.encoded[..]
+                }
             };
             self.mcap.write_to_known_channel(header, data)?;
             self.in_chunk += data.len() as u64 + MESSAGE_RECORD;
@@ -474,6 +553,17 @@ fn serve<W: Write + Seek>(
         }
     }
     None
+}
+
+/// The `/scene` update of an impact: its arrow, `length` (m) long in `style`.
+pub(super) fn arrow_update(
+    impact: &ImpactRecord,
+    (length, style): (f64, ArrowStyle),
+) -> Result<SceneUpdate, LogError> {
+    Ok(SceneUpdate {
+        deletions: vec![],
+        entities: vec![draw::impulse_arrow(impact, length, &style)?],
+    })
 }
 
 /// Appends `message` as JSON to `buffer`; on an error `buffer` is left as it was. The one

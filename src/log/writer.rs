@@ -11,6 +11,7 @@ use mcap::records::{MessageHeader, Metadata};
 use serde::Serialize;
 
 use super::LogError;
+use super::draw::ArrowStyle;
 use super::foxglove::{
     Encode, FrameTransforms, Log, LogLevel, SceneUpdate, append_protobuf, first_non_finite_scene,
     first_non_finite_transforms, nanoseconds, timestamp,
@@ -197,6 +198,44 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         let start = self.mcap.buffer().len();
         append_json(self.mcap.buffer(), Topic::Impacts, impact)?;
         self.push(Topic::Impacts, time, start)
+    }
+
+    /// Writes an impact: its ledger entry on `/impacts`, its arrow on `/scene`
+    /// ([`draw::impulse_arrow`](super::draw::impulse_arrow), `length` m long in `style`)
+    /// and its line on `/log`, all at `impact.t`. The record is copied; the three messages
+    /// are encoded on the writer thread.
+    pub fn impact_drawn(
+        &mut self,
+        impact: &ImpactRecord,
+        (length, style): (f64, ArrowStyle),
+    ) -> Result<(), LogError> {
+        if let Some(field) = impact.first_non_finite() {
+            return Err(LogError::NonFinite {
+                what: Topic::Impacts.name(),
+                t: impact.t,
+                field,
+            });
+        }
+        let c = style.color;
+        let numbers = [length, style.length, style.elevation, c.r, c.g, c.b, c.a];
+        if !numbers.iter().all(|x| x.is_finite()) {
+            // The slow path names the field.
+            let update = super::sink::arrow_update(impact, (length, style))?;
+            let field = first_non_finite_scene(&update).unwrap_or_default();
+            return Err(LogError::NonFinite {
+                what: Topic::Scene.name(),
+                t: impact.t,
+                field,
+            });
+        }
+        let time = nanoseconds(impact.t)?;
+        let topics = [Topic::Impacts, Topic::Scene, Topic::Log];
+        let headers = topics.map(|topic| self.header(topic, time));
+        self.mcap.push_impact(headers, impact, (length, style))?;
+        for topic in topics {
+            self.advance(topic);
+        }
+        Ok(())
     }
 
     /// Writes the drawing of every body and obstacle on `/geometry` at simulated time `t`
