@@ -16,11 +16,12 @@
 //! - `no log`: a [`NullObserver`], which asks for no samples: the simulation alone;
 //! - `samples only`: a [`Recorder`] keeping the samples in memory: the cost of sampling at
 //!   100 Hz (dense output, energies, gaps, body poses), without encoding;
-//! - `mcap log 100 Hz`: the [`RunLogger`] writing `/state`, `/tf`, `/impacts`, `/scene`,
-//!   `/log` and the metadata as JSON in LZ4 chunks to an in-memory `Cursor<Vec<u8>>`
-//!   (what `ricochet run` does, minus the disk). The simulation's thread copies each
-//!   sample into a batch; the log's own thread encodes the JSON, compresses the chunks
-//!   and writes them: on a machine with a second core free the two overlap.
+//! - `mcap log 100 Hz`: the [`RunLogger`] writing log format 2 (`/state` and `/impacts` as
+//!   JSON; `/geometry`, `/scene`, `/tf`, `/log` as protobuf; the metadata) in LZ4 chunks to
+//!   an in-memory `Cursor<Vec<u8>>` (what `ricochet run` does, minus the disk). The
+//!   simulation's thread copies each sample and each impact into a batch; the log's own
+//!   thread encodes them, compresses the chunks and writes them: on a machine with a
+//!   second core free the two overlap.
 //!
 //! Criterion's throughput is set to the simulated time, so its `thrpt` line reads
 //! *simulated seconds per wall second*. The work counters (steps, right-hand-side
