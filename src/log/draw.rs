@@ -54,7 +54,8 @@ pub struct DrawStyle {
     pub depth: f64,
     /// Width of lines: segments, polylines, outlines, markers (m).
     pub line_width: f64,
-    /// Side of the square that stands for a half-space (m).
+    /// Side of the square that stands for a half-space (m): 10 km by default, so that a
+    /// long run (a rimless wheel rolls 740 m down its slope in 1000 s) stays on it.
     pub half_space_size: f64,
 }
 
@@ -63,7 +64,7 @@ impl Default for DrawStyle {
         Self {
             depth: 0.02,
             line_width: 0.01,
-            half_space_size: 200.0,
+            half_space_size: 10_000.0,
         }
     }
 }
