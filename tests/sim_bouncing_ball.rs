@@ -4,7 +4,7 @@
 //! `e^(2k) h0` and lasts `2 e^k v1 / g`; the impacts accumulate at
 //! `t∞ = t1 + (2 v1/g) e/(1 − e)`.
 
-use ricochet::sim::{MaterialOverride, Recorder, Simulation, StopReason};
+use ricochet::sim::{ImpactCause, MaterialOverride, PairMode, Recorder, Simulation, StopReason};
 
 const G: f64 = 9.81;
 const H0: f64 = 1.0;
@@ -107,15 +107,40 @@ fn the_ball_comes_to_rest_at_the_accumulation_point() {
             "e = {e}: t∞ = {t_acc} (closed form {t_inf}, {:.1e})",
             t_acc - t_inf
         );
+        // The passage to rest is stamped at t∞ (in /log and in the samples' mode), and t∞
+        // is the closed form to 1e-9 s.
         assert!(
-            (t_acc - t_inf).abs() <= 1e-6,
+            (t_acc - t_inf).abs() <= 1e-9,
             "e = {e}: t∞ = {t_acc} vs {t_inf}"
         );
-        assert!(rest.t < t_acc);
-        // Nothing happens after: no impact, and the ball rests on the floor at the end.
-        assert!(rec.impacts.iter().all(|i| i.t <= rest.t));
+        assert_eq!(rest.t, t_acc);
+        assert_eq!((rest.from, rest.to), (PairMode::Free, PairMode::Sticking));
+        // The last impact is the plastic one that ends the accumulation, before t∞; no
+        // impact after it, and no impulse of the ledger pulls.
         let closing = rec.impacts.last().unwrap();
-        assert_eq!((closing.t, closing.material.e), (rest.t, 0.0));
+        assert_eq!(
+            (closing.cause, closing.material.e),
+            (ImpactCause::AccumulationEnd, 0.0)
+        );
+        assert!(closing.t < t_acc && closing.v_a.n < 0.0);
+        assert!(closing.outcome.v_s.n.abs() <= 1e-15);
+        for ev in &rec.impacts {
+            assert!(
+                ev.outcome.impulse.n > 0.0,
+                "e = {e}: {:?}",
+                ev.outcome.impulse
+            );
+        }
+        // The samples show the ball free until t∞, then sticking.
+        assert!(rec.sample_modes.len() > 100);
+        for (t, modes) in &rec.sample_modes {
+            let expected = if *t < t_acc {
+                PairMode::Free
+            } else {
+                PairMode::Sticking
+            };
+            assert_eq!(modes[0], expected, "e = {e}: t = {t}");
+        }
         let (y, v) = (summary.state.q[0], summary.state.u[0]);
         assert!((y - RADIUS).abs() <= scales.gap_tol, "e = {e}: y = {y}");
         assert!(v.abs() <= 1e-12, "e = {e}: v = {v}");

@@ -575,11 +575,12 @@ fn impact_ledger_is_what_the_run_reported() {
                     }
                 }
                 ImpactCause::AccumulationEnd => {
-                    // The hop left is below the resting speed; the point comes to rest.
-                    assert!(
-                        r.v_a.n > 0.0 && r.v_s.n.abs() <= 1e-12 && r.e == 0.0,
-                        "{ctx}"
-                    );
+                    // The impact that ends an accumulation, made plastic with the pair's
+                    // friction: an approach, a push, inside the cone, the point at rest.
+                    assert!(r.v_a.n < 0.0 && r.i_n > 0.0 && r.e == 0.0, "{ctx}");
+                    assert!(r.v_s.n.abs() <= 1e-12 * r.v_a.n.abs(), "{ctx}");
+                    assert!(r.i_t.abs() <= r.mu * r.i_n * (1.0 + 1e-12), "{ctx}");
+                    assert!(r.alpha.is_some_and(f64::is_finite), "{ctx}");
                 }
                 other => panic!("{ctx}: no {other:?} expected in these scenes"),
             }

@@ -97,6 +97,10 @@ pub struct ContactState {
     pub mode_code: u8,
     /// Signed gap `g` (m): positive when apart, negative when penetrating.
     pub gap: f64,
+    /// Direction of the slip along the contact tangent `t = perp(n)` when sliding: `1` or
+    /// `−1`; `0` otherwise (a slip that stops and reverses flips it).
+    #[serde(default)]
+    pub slip: i8,
 }
 
 impl ContactState {
@@ -107,6 +111,7 @@ impl ContactState {
             mode,
             mode_code: mode.code(),
             gap,
+            slip: 0,
         }
     }
 }
@@ -201,20 +206,24 @@ pub enum ImpactCause {
     Simultaneous,
     /// Painlevé's inconsistency resolved by an impact without collision.
     WithoutCollision,
-    /// The closing impulse at the end of an accumulation of impacts (`i_n` may be
-    /// negative).
+    /// The end of an accumulation of impacts: the impact after which the hop would be too
+    /// small to resolve, made plastic (`e = 0`, with the pair's friction).
     AccumulationEnd,
+    /// The end of a rocking accumulation: the projection of the velocity onto the closed
+    /// contacts, whose normal impulse on the lifting point is negative.
+    RockingEnd,
 }
 
 impl ImpactCause {
     /// The name used in logs: `collision`, `simultaneous`, `without_collision`,
-    /// `accumulation_end`.
+    /// `accumulation_end`, `rocking_end`.
     pub fn name(self) -> &'static str {
         match self {
             ImpactCause::Collision => "collision",
             ImpactCause::Simultaneous => "simultaneous",
             ImpactCause::WithoutCollision => "without_collision",
             ImpactCause::AccumulationEnd => "accumulation_end",
+            ImpactCause::RockingEnd => "rocking_end",
         }
     }
 }
@@ -261,8 +270,8 @@ pub struct ImpactRecord {
     pub v_a: ContactVelocity,
     /// Velocity of separation `v^S` in the contact frame (m/s) [P, Eq. (21)].
     pub v_s: ContactVelocity,
-    /// Normal impulse `I_n` (N·s) [P, Eq. (13)]: `≥ 0`, except for a closing impulse
-    /// (`cause` `accumulation_end`).
+    /// Normal impulse `I_n` (N·s) [P, Eq. (13)]: `≥ 0`, except on the lifting point of a
+    /// `rocking_end`.
     pub i_n: f64,
     /// Tangential impulse `I_t` (N·s) [P, Eq. (13)].
     pub i_t: f64,

@@ -311,7 +311,12 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
         rec.u.clear();
         rec.u.extend_from_slice(s.u);
         rec.energy = Energy::new(s.energy.kinetic, s.energy.potential);
-        for ((c, &gap), mode) in rec.contacts.iter_mut().zip(s.gaps).zip(s.modes) {
+        for (((c, &gap), mode), &slip) in (rec.contacts.iter_mut())
+            .zip(s.gaps)
+            .zip(s.modes)
+            .zip(s.slips)
+        {
+            c.slip = if *mode == PairMode::Sliding { slip } else { 0 };
             c.mode = if s.at_impact && gap <= self.gap_tol {
                 ContactMode::Impact
             } else {
@@ -380,6 +385,7 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
                 crate::sim::ImpactCause::Simultaneous => ImpactCause::Simultaneous,
                 crate::sim::ImpactCause::WithoutCollision => ImpactCause::WithoutCollision,
                 crate::sim::ImpactCause::AccumulationEnd => ImpactCause::AccumulationEnd,
+                crate::sim::ImpactCause::RockingEnd => ImpactCause::RockingEnd,
             },
             e: ev.material.e,
             mu: ev.material.mu,

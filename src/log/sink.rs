@@ -42,7 +42,7 @@ use mcap::records::{MessageHeader, Metadata};
 use super::LogError;
 use super::draw::{self, ArrowStyle};
 use super::foxglove::{FrameTransforms, LogLevel, SceneUpdate, append_protobuf};
-use super::records::{ImpactRecord, StateRecord};
+use super::records::{ContactState, ImpactRecord, StateRecord};
 use super::run::impact_line;
 use super::schemas::Topic;
 use super::writer::log_message;
@@ -172,10 +172,19 @@ fn copy_state(dst: &mut StateRecord, src: &StateRecord) {
     for (k, c) in src.contacts.iter().enumerate() {
         match dst.contacts.get_mut(k) {
             Some(d) => {
-                d.pair.clone_from(&c.pair);
-                d.mode = c.mode;
-                d.mode_code = c.mode_code;
-                d.gap = c.gap;
+                // Every field, by name: a field added to the record must be copied here.
+                let ContactState {
+                    pair,
+                    mode,
+                    mode_code,
+                    gap,
+                    slip,
+                } = c;
+                d.pair.clone_from(pair);
+                d.mode = *mode;
+                d.mode_code = *mode_code;
+                d.gap = *gap;
+                d.slip = *slip;
             }
             None => dst.contacts.push(c.clone()),
         }
@@ -221,6 +230,14 @@ struct Failure {
 
 impl Failure {
     fn set(&self, error: LogError) {
+        // The mcap crate reports an I/O error met while binrw writes a record as a parse
+        // error; the caller sees the I/O error itself (a full disk, a closed pipe).
+        let error = match error {
+            LogError::Mcap(McapError::Parse(binrw::Error::Io(io))) => {
+                LogError::Mcap(McapError::Io(io))
+            }
+            other => other,
+        };
         if let Ok(mut slot) = self.error.lock() {
             slot.get_or_insert(error);
         }

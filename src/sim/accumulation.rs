@@ -22,11 +22,13 @@ pub struct Scales {
     /// `|v_n| > v_drift = 1e-7 v_ref` (m/s): its normal speed is held at zero through its
     /// acceleration, and drifts with the integration error.
     pub v_drift: Real,
-    /// An impact that would leave the contact separating slower than `v_rest` (m/s) ends
-    /// the bouncing: the contact comes to rest (an accumulation of impacts). The next hop
-    /// would rise `v²/(2a)` with `a = |g|`: `v_rest` makes that 100 times the position
-    /// tolerance of the integrator, `δ = atol + rtol L`, below which the event location
-    /// cannot tell a hop from rounding: `v_rest = √(2 a · 100 δ)`.
+    /// The height of the smallest hop the loop resolves, `h_rest = 100 δ` (m): 100 times
+    /// the position tolerance of the integrator, `δ = atol + rtol L`, below which the event
+    /// location cannot tell a hop from rounding. See [`Scales::v_rest_at`].
+    pub h_rest: Real,
+    /// The resting speed of a contact whose normal acceleration is `−|g|`,
+    /// [`Scales::v_rest_at`]`(−|g|)` (m/s; with `a = v_ref²/L` without gravity): the
+    /// reference value for messages and tests.
     pub v_rest: Real,
 }
 
@@ -51,7 +53,22 @@ impl Scales {
             gap_tol: 1e-9 * length,
             v_tiny: 1e-10 * speed,
             v_drift: 1e-7 * speed,
+            h_rest: 100.0 * delta,
             v_rest: (2.0 * accel * 100.0 * delta).sqrt(),
+        }
+    }
+
+    /// The resting speed of a contact point whose normal acceleration in flight is `a_n`
+    /// (m/s², negative when it falls back): an impact that leaves it separating at most
+    /// this fast starts a hop lower than `h_rest` (`v²/(2|a_n|) ≤ h_rest`), too small to
+    /// resolve, and ends an accumulation of impacts. `√(2 |a_n| h_rest)` when `a_n < 0`;
+    /// `0` when the point accelerates away (`a_n ≥ 0`): it leaves for good, however
+    /// slowly it starts.
+    pub fn v_rest_at(&self, a_n: Real) -> Real {
+        if a_n < 0.0 {
+            (2.0 * -a_n * self.h_rest).sqrt()
+        } else {
+            0.0
         }
     }
 }

@@ -4,12 +4,19 @@
 //! 1. **impacts**: the contact points that approach. One point alone: the one-point law
 //!    of [P] (the scene's law). Several at once: Moreau's generalized Newton law over all
 //!    the touching points ([`ImpactMap::apply_many`]).
-//! 2. **accumulations**: after the impacts, a touching point that separates slower than
-//!    `v_rest` (see [`super::Scales`]) starts a hop too small to resolve — a bouncing ball
-//!    or a rocking block at the end of an **accumulation of impacts** (Zeno). The hops left
-//!    are replaced by one plastic normal impulse over the touching points
-//!    ([`ImpactMap::close`]): they come to rest and stay closed. The time at which the
-//!    infinitely many hops would end is extrapolated from their geometric decay.
+//! 2. **accumulations**: an impact that leaves a touching point separating slower than its
+//!    resting speed ([`super::Scales::v_rest_at`], from the point's own normal
+//!    acceleration) would start a hop too small to resolve — a bouncing ball or a pendulum
+//!    tip at the end of an **accumulation of impacts** (Zeno). That impact is done again,
+//!    plastic: the same law with `e = 0` and the pair's friction (cause
+//!    `accumulation_end`), so the infinitely many hops left are replaced by the impulse
+//!    they add up to — the same normal impulse, each hop's Coulomb friction with it — and
+//!    the contact stays closed. No impulse pulls. The time `t∞` the hops would end is
+//!    extrapolated from their geometric decay, and the passage to persistent contact is
+//!    reported then, named by the mode it enters. Only a rocking body, whose plastic impact
+//!    on one corner lifts the other too slowly to resolve, has that corner held down by a
+//!    projection of the velocity ([`ImpactMap::close`], cause `rocking_end`): no impulse
+//!    `≥ 0` at that instant can do it.
 //! 3. **modes**: the touching points that do not approach get their persistent-contact
 //!    modes (open, stick, slide) from the complementarity problem at the acceleration
 //!    level ([`Persistent::select`]). **Painlevé's paradox**: no consistent mode
@@ -22,7 +29,7 @@
 use super::impact_map::pair_name;
 use super::observer::{PairMode, Transition};
 use super::persistent::{Candidate, Closed, Hold, pair_points};
-use super::{AtTime, ImpactEvent, Level, Observer, SimError, Simulation, StopReason};
+use super::{AtTime, ImpactCause, ImpactEvent, Level, Observer, SimError, Simulation, StopReason};
 use crate::contact::{ManifoldWorkspace, PairContact};
 use crate::dynamics::forward_dynamics;
 use crate::events::Event;
@@ -58,6 +65,7 @@ impl Simulation<'_> {
         observer: &mut dyn Observer,
     ) -> Result<Option<StopReason>, SimError> {
         let t = self.stepper.t();
+        self.flush_passages(t, observer)?;
         let mut y = std::mem::take(&mut self.y);
         y.copy_from_slice(self.stepper.y());
         let result = self.contacts_at(t, &mut y, event, observer);
@@ -102,42 +110,53 @@ impl Simulation<'_> {
                 if impacts_here == 0 {
                     self.sample(t, y, true, observer)?;
                 }
-                let points = self.points_below(&touching, self.scales.v_tiny);
-                let (q, u) = y[..2 * n].split_at_mut(n);
-                let events = if approaching.len() == 1 && (impacts_here == 0 || points.len() == 1) {
-                    let p = approaching[0];
-                    let material = self.material(p.pair);
-                    let ev = self.map.apply_at(
-                        self.model,
-                        (p.pair, p.contact),
-                        material,
-                        None,
-                        t,
-                        q,
-                        u,
-                    )?;
-                    ev.into_iter().collect()
-                } else {
-                    // Several points approach at once, or an impact made another touching
-                    // point approach (a rod landing on one end strikes with the other).
-                    let what = if approaching.len() > 1 {
-                        "simultaneous impact"
-                    } else {
-                        "impacts in cascade at one instant"
-                    };
-                    observer
-                        .message(
+                let single = approaching.len() == 1
+                    && (impacts_here == 0
+                        || self.points_below(&touching, self.scales.v_tiny).len() == 1);
+                let u_before = y[n..2 * n].to_vec();
+                // Once an accumulation ended at this instant, the impacts in cascade that
+                // follow (the other end of a rod landing flat) are plastic too.
+                let mut events = self.impact_round(
+                    t,
+                    y,
+                    &touching,
+                    &approaching,
+                    single,
+                    accumulation_ended,
+                    observer,
+                )?;
+                // 2. Accumulations: an impact that leaves a touching point separating too
+                // slowly for its hop to be resolved is made plastic.
+                if !accumulation_ended {
+                    let after = self.touching(t, y)?;
+                    let slow = self.slow_separations(t, y, &after)?;
+                    if !slow.is_empty() {
+                        self.note_accumulations(t, &slow);
+                        y[n..2 * n].copy_from_slice(&u_before);
+                        let single = single && slow.iter().all(|p| p.pair == approaching[0].pair);
+                        events = self.impact_round(
                             t,
-                            Level::Warning,
-                            &format!(
-                                "{what} of {} contact points: Moreau's generalized Newton law \
-                                 with Coulomb friction",
-                                points.len()
-                            ),
-                        )
-                        .map_err(|e| e.at(t))?;
-                    self.map.apply_many(self.model, &points, t, q, u)?
-                };
+                            y,
+                            &touching,
+                            &approaching,
+                            single,
+                            true,
+                            observer,
+                        )?;
+                        accumulation_ended = true;
+                        // A rocking body: the plastic impact lifts another touching point,
+                        // too slowly to resolve; no impulse ≥ 0 holds it down.
+                        let after = self.touching(t, y)?;
+                        if !self.slow_separations(t, y, &after)?.is_empty() {
+                            let points = self.points_below(&after, self.scales.v_rest);
+                            let (q, u) = y[..2 * n].split_at_mut(n);
+                            let closing =
+                                self.map
+                                    .close(self.model, &points, self.scales.v_rest, t, q, u)?;
+                            events.extend(closing);
+                        }
+                    }
+                }
                 impacts_here += events.len();
                 if let Some(stop) = self.ledger(t, events, observer)? {
                     return Ok((true, Some(stop)));
@@ -145,18 +164,7 @@ impl Simulation<'_> {
                 changed = true;
                 continue;
             }
-            // 2. Accumulations: hops too small to resolve end.
             if impacts_here > 0 && !accumulation_ended {
-                let slow: Vec<Touch> = (touching.iter())
-                    .filter(|p| p.v_n > p.still && p.v_n <= self.scales.v_rest)
-                    .copied()
-                    .collect();
-                if !slow.is_empty() {
-                    self.end_accumulation(t, y, &touching, &slow, observer)?;
-                    accumulation_ended = true;
-                    changed = true;
-                    continue;
-                }
                 self.remember_hops(t, &touching);
             }
             // 3. Modes of the touching points that do not separate.
@@ -348,22 +356,117 @@ impl Simulation<'_> {
         }
     }
 
-    /// The end of an accumulation of impacts at `t`: the `slow` points separate slower
-    /// than `v_rest`. Extrapolates the time the hops would end, from the last hop of each
-    /// pair: with `r = v / v_prev` the ratio of successive separation speeds and
-    /// `Δt = t − t_prev` the last hop's duration, the hops left last
-    /// `Σ_{k≥1} rᵏ Δt = Δt r / (1 − r)` (exact for hops of constant deceleration, the
-    /// bouncing ball; the small-amplitude limit of rocking). Then closes the touching
-    /// points ([`ImpactMap::close`]) and reports a transition per pair.
-    fn end_accumulation(
+    /// One round of impacts at `t` on the touching points, `approaching` among them: the
+    /// one-point law of the scene when `single`, else Moreau's generalized Newton law over
+    /// the touching points that do not separate; `u` (in `y`) becomes `u⁺`. `plastic`: the
+    /// same law with `e = 0`, reported as the end of an accumulation.
+    #[allow(clippy::too_many_arguments)]
+    fn impact_round(
         &mut self,
         t: Real,
         y: &mut [Real],
         touching: &[Touch],
-        slow: &[Touch],
+        approaching: &[Touch],
+        single: bool,
+        plastic: bool,
         observer: &mut dyn Observer,
-    ) -> Result<(), SimError> {
+    ) -> Result<Vec<ImpactEvent>, SimError> {
         let n = self.model.nq();
+        let plastic_material = |m: Material| if plastic { Material { e: 0.0, ..m } } else { m };
+        let mut points = self.points_below(touching, self.scales.v_tiny);
+        for p in &mut points {
+            p.2 = plastic_material(p.2);
+        }
+        let (q, u) = y[..2 * n].split_at_mut(n);
+        let mut events: Vec<ImpactEvent> = if single {
+            let p = approaching[0];
+            let material = plastic_material(self.material(p.pair));
+            let ev = self
+                .map
+                .apply_at(self.model, (p.pair, p.contact), material, None, t, q, u)?;
+            ev.into_iter().collect()
+        } else {
+            // Several points approach at once, or an impact made another touching point
+            // approach (a rod landing on one end strikes with the other).
+            if !plastic {
+                let what = if approaching.len() > 1 {
+                    "simultaneous impact"
+                } else {
+                    "impacts in cascade at one instant"
+                };
+                observer
+                    .message(
+                        t,
+                        Level::Warning,
+                        &format!(
+                            "{what} of {} contact points: Moreau's generalized Newton law with \
+                             Coulomb friction",
+                            points.len()
+                        ),
+                    )
+                    .map_err(|e| e.at(t))?;
+            }
+            self.map.apply_many(self.model, &points, t, q, u)?
+        };
+        if plastic {
+            for ev in &mut events {
+                ev.cause = ImpactCause::AccumulationEnd;
+            }
+        }
+        Ok(events)
+    }
+
+    /// The touching points of `after` (at `(t, y)`, just after an impact) that separate,
+    /// but slower than their resting speed ([`super::Scales::v_rest_at`] of their normal
+    /// acceleration with no contact force): the hops they start are too small to resolve.
+    fn slow_separations(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        after: &[Touch],
+    ) -> Result<Vec<Touch>, SimError> {
+        // Only points slower than the resting speed of a thousand times |g| are candidates.
+        let cap = 1e3_f64.sqrt() * self.scales.v_rest;
+        let candidates: Vec<Touch> = (after.iter())
+            .filter(|p| p.v_n > p.still && p.v_n <= cap)
+            .copied()
+            .collect();
+        if candidates.is_empty() {
+            return Ok(candidates);
+        }
+        let n = self.model.nq();
+        let (q, u) = (&y[..n], &y[n..2 * n]);
+        forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
+        let points: Vec<Candidate> = (candidates.iter())
+            .map(|p| Candidate {
+                pair: p.pair,
+                local: p.local,
+                mu: 0.0,
+                slip: None,
+            })
+            .collect();
+        let sel = self.system.persistent.select(
+            self.model,
+            &self.sampler,
+            (t, q, u),
+            &points,
+            Real::INFINITY,
+        )?;
+        self.restore_persistent();
+        Ok((candidates.iter().zip(&sel.free))
+            .filter(|(p, a_n)| p.v_n <= self.scales.v_rest_at(**a_n))
+            .map(|(p, _)| *p)
+            .collect())
+    }
+
+    /// An accumulation of impacts ends at `t` on the pairs of the `slow` points (the hop
+    /// after the impact too small to resolve). Extrapolates the time `t∞` the hops would
+    /// end, from the last hop of each pair: with `r = v / v_prev` the ratio of successive
+    /// separation speeds and `Δt = t − t_prev` the last hop's duration, the hops left last
+    /// `Σ_{k≥1} rᵏ Δt = Δt r / (1 − r)` (exact for hops of constant deceleration, the
+    /// bouncing ball; the small-amplitude limit of rocking). The passage to persistent
+    /// contact is reported at `t∞` ([`Self::set_closed`]).
+    fn note_accumulations(&mut self, t: Real, slow: &[Touch]) {
         let mut pairs: Vec<(PairId, Real)> = Vec::new();
         for p in slow {
             match pairs.iter_mut().find(|(pair, _)| *pair == p.pair) {
@@ -371,19 +474,19 @@ impl Simulation<'_> {
                 None => pairs.push((p.pair, p.v_n)),
             }
         }
-        let mut notes = Vec::with_capacity(pairs.len());
-        for &(pair, v) in &pairs {
-            let (t_inf, r) = match self.last_separation[pair.index()] {
+        for (pair, v) in pairs {
+            let k = pair.index();
+            let extrapolated = match self.last_separation[k] {
                 Some((t_prev, v_prev)) if t_prev < t && v < v_prev => {
                     let r = v / v_prev;
-                    (t + (t - t_prev) * r / (1.0 - r), Some(r))
+                    Some((t + (t - t_prev) * r / (1.0 - r), r))
                 }
-                _ => (Real::NAN, None),
+                _ => None,
             };
             // Without a previous hop to extrapolate from, t∞ is unknown: say so rather
-            // than print NaN.
-            let end = match r {
-                Some(r) => {
+            // than print NaN, and stamp the passage at t.
+            let end = match extrapolated {
+                Some((t_inf, r)) => {
                     format!("the hops would end at t∞ = {t_inf} s (extrapolated, ratio {r:.4})")
                 }
                 None => {
@@ -391,33 +494,16 @@ impl Simulation<'_> {
                 }
             };
             let note = format!(
-                "accumulation of impacts: the last hop ({v:.3e} m/s) is below the resting speed \
-                 {:.1e} m/s; the contact comes to rest (plastic normal impulses) and stays \
-                 closed; {end}",
-                self.scales.v_rest
+                "accumulation of impacts: the hop after the impact at t = {t} s ({v:.3e} m/s) \
+                 is below the resting speed; the impact is made plastic (e = 0, with its \
+                 friction) and the contact stays closed; {end}"
             );
-            notes.push((pair, note, t_inf));
-            self.last_separation[pair.index()] = None;
-        }
-        let points = self.points_below(touching, self.scales.v_rest);
-        let (q, u) = y[..2 * n].split_at_mut(n);
-        let events = self
-            .map
-            .close(self.model, &points, self.scales.v_rest, t, q, u)?;
-        self.ledger(t, events, observer)?;
-        for (pair, note, t_inf) in notes {
-            let from = self.modes[pair.index()];
-            self.modes[pair.index()] = PairMode::Sticking;
-            self.report(
-                t,
-                pair,
-                (from, PairMode::Sticking),
+            self.accumulating[k] = Some(Accumulation {
+                t_inf: extrapolated.map(|x| x.0),
                 note,
-                t_inf.is_finite().then_some(t_inf),
-                observer,
-            )?;
+            });
+            self.last_separation[k] = None;
         }
-        Ok(())
     }
 
     /// Puts the closed set back in the ODE system after a selection used its workspace.
@@ -599,20 +685,106 @@ impl Simulation<'_> {
                 .filter(|c| c.pair == pair)
                 .map(|c| c.hold);
             let mut mode = PairMode::Free;
+            let mut slip = 0i8;
             for h in holds {
                 mode = match (mode, h) {
                     (PairMode::Sliding, _) | (_, Hold::Slide(_)) => PairMode::Sliding,
                     _ => PairMode::Sticking,
                 };
+                if let (Hold::Slide(s), 0) = (h, slip) {
+                    slip = if s > 0.0 { 1 } else { -1 };
+                }
             }
-            if mode != self.modes[k] {
-                let from = self.modes[k];
+            let (current, current_slip) = self.current_mode(pair);
+            if let Some(acc) = self.accumulating[k].take() {
+                // The end of an accumulation: the passage to the mode it enters is
+                // reported at t∞, when the hops it replaced would have ended.
+                self.flush_passages_of(pair, t, observer)?;
+                let note = format!("{}; {} → {}", acc.note, current.name(), mode.name());
+                self.passages.push(Passage {
+                    t: acc.t_inf.unwrap_or(t).max(t),
+                    pair,
+                    from: current,
+                    to: mode,
+                    slip,
+                    note,
+                    t_accumulation: acc.t_inf,
+                });
+            } else if mode != current || (mode == PairMode::Sliding && slip != current_slip) {
+                self.flush_passages_of(pair, t, observer)?;
+                let note = if mode == current {
+                    format!(
+                        "the slip stops and reverses (along {} t)",
+                        if slip > 0 { "+" } else { "−" }
+                    )
+                } else {
+                    format!("{} → {}", current.name(), mode.name())
+                };
                 self.modes[k] = mode;
-                let note = format!("{} → {}", from.name(), mode.name());
-                self.report(t, pair, (from, mode), note, None, observer)?;
+                self.slips[k] = slip;
+                self.report(t, pair, (current, mode), note, None, observer)?;
             }
         }
         Ok(!same)
+    }
+
+    /// The mode and slip direction of `pair` after its pending passage, if any.
+    fn current_mode(&self, pair: PairId) -> (PairMode, i8) {
+        let k = pair.index();
+        (self.passages.iter().rev())
+            .find(|p| p.pair == pair)
+            .map_or((self.modes[k], self.slips[k]), |p| (p.to, p.slip))
+    }
+
+    /// Reports the pending passages (ends of accumulations) stamped at or before `upto`,
+    /// in time order.
+    pub(super) fn flush_passages(
+        &mut self,
+        upto: Real,
+        observer: &mut dyn Observer,
+    ) -> Result<(), SimError> {
+        while let Some(i) = (0..self.passages.len())
+            .filter(|&i| self.passages[i].t <= upto)
+            .min_by(|&i, &j| self.passages[i].t.total_cmp(&self.passages[j].t))
+        {
+            let p = self.passages.remove(i);
+            self.modes[p.pair.index()] = p.to;
+            self.slips[p.pair.index()] = p.slip;
+            self.report(
+                p.t,
+                p.pair,
+                (p.from, p.to),
+                p.note,
+                p.t_accumulation,
+                observer,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Reports the pending passage of `pair` before a new change of its mode at `t`: at
+    /// `t` if it was stamped later (the mode changes again before the hops would end).
+    fn flush_passages_of(
+        &mut self,
+        pair: PairId,
+        t: Real,
+        observer: &mut dyn Observer,
+    ) -> Result<(), SimError> {
+        while let Some(i) = self.passages.iter().position(|p| p.pair == pair) {
+            let mut p = self.passages.remove(i);
+            p.t = p.t.min(t);
+            self.modes[p.pair.index()] = p.to;
+            self.slips[p.pair.index()] = p.slip;
+            self.report(
+                p.t,
+                p.pair,
+                (p.from, p.to),
+                p.note,
+                p.t_accumulation,
+                observer,
+            )?;
+        }
+        Ok(())
     }
 
     /// Reports a change of mode of `pair` on the log and to the observer.
@@ -670,6 +842,32 @@ impl Simulation<'_> {
         self.ledger(t, ev.into_iter().collect(), observer)?;
         Ok(())
     }
+}
+
+/// An accumulation of impacts that ended on a pair at the current instant: what the
+/// mode selection that follows reports.
+#[derive(Clone, Debug)]
+pub(super) struct Accumulation {
+    /// When the hops would have ended, if it could be extrapolated (s).
+    pub t_inf: Option<Real>,
+    /// What happened, in words.
+    pub note: String,
+}
+
+/// A change of mode reported later than it is made: the passage to persistent contact at
+/// the end of an accumulation, stamped at `t∞`.
+#[derive(Clone, Debug)]
+pub(super) struct Passage {
+    /// When it is reported (s).
+    pub t: Real,
+    pub pair: PairId,
+    pub from: PairMode,
+    pub to: PairMode,
+    /// The slip direction it enters (see [`super::Sample::slips`]).
+    pub slip: i8,
+    pub note: String,
+    /// When the hops would have ended (s).
+    pub t_accumulation: Option<Real>,
 }
 
 /// What the mode selection found.

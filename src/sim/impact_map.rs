@@ -74,20 +74,27 @@ pub enum ImpactCause {
     /// Painlevé's inconsistency: the one-point law in its grazing limit, an impact without
     /// collision ([`ImpactMap::apply_at`] with a floor).
     WithoutCollision,
-    /// The end of an accumulation of impacts: the closing impulse that brings the touching
-    /// points to rest ([`ImpactMap::close`]); its normal impulse may be negative.
+    /// The end of an accumulation of impacts: the impact after which the hop would be too
+    /// small to resolve, made plastic — the scene's law (one point) or Moreau's law
+    /// (several) with `e = 0` and the pair's friction; the contact stays closed.
     AccumulationEnd,
+    /// The end of a rocking accumulation: the projection of the velocity onto the closed
+    /// contacts ([`ImpactMap::close`]) when the plastic impact that ends an accumulation
+    /// lifts another touching point too slowly to resolve; its normal impulse on the
+    /// lifting point is negative.
+    RockingEnd,
 }
 
 impl ImpactCause {
     /// The name used in logs: `collision`, `simultaneous`, `without_collision`,
-    /// `accumulation_end`.
+    /// `accumulation_end`, `rocking_end`.
     pub fn name(self) -> &'static str {
         match self {
             ImpactCause::Collision => "collision",
             ImpactCause::Simultaneous => "simultaneous",
             ImpactCause::WithoutCollision => "without_collision",
             ImpactCause::AccumulationEnd => "accumulation_end",
+            ImpactCause::RockingEnd => "rocking_end",
         }
     }
 }
@@ -136,6 +143,9 @@ impl ImpactEvent {
 
 /// Scratch of the impact map, allocated once per run.
 pub struct ImpactMap {
+    /// Below this normal speed (m/s) a point of a simultaneous impact does not approach
+    /// (rounding noise of a touching or held contact): its ledger entry has no `α`.
+    still: Real,
     data: Data,
     frame_ws: FrameWorkspace,
     /// `J_n` (nu).
@@ -153,6 +163,7 @@ impl ImpactMap {
     pub fn new(model: &Model) -> Self {
         let nu = model.nu();
         Self {
+            still: 0.0,
             data: Data::new(model),
             frame_ws: FrameWorkspace::new(model),
             j_n: vec![0.0; nu],
@@ -160,6 +171,14 @@ impl ImpactMap {
             x_n: vec![0.0; nu],
             x_t: vec![0.0; nu],
         }
+    }
+
+    /// The same, with `still` (m/s): in a simultaneous impact, a point whose normal speed
+    /// is above `−still` does not approach (rounding noise), and its ledger entry has no
+    /// `α = v_t / |v_n|`.
+    pub fn with_still(mut self, still: Real) -> Self {
+        self.still = still;
+        self
     }
 
     /// The contact frame of `pair` at `(t, q, u)`: where it is, how far, how fast.
@@ -453,15 +472,18 @@ impl ImpactMap {
         )
     }
 
-    /// Ends an accumulation of impacts (Zeno): brings every point of `points` to rest in
+    /// Ends a *rocking* accumulation of impacts: brings every point of `points` to rest in
     /// the normal direction, `v_n⁺ = 0`, and in the tangential one too where it barely slips
     /// (`|v_t⁻| ≤ v_stop`) and has friction, at `(t, q, u)`; `u` becomes `u⁺`. One ledger
-    /// entry per point with an impulse (reported with `e = 0`).
+    /// entry per point with an impulse (reported with `e = 0`). Used only when the plastic
+    /// impact that ends an accumulation leaves another touching point lifting off slower
+    /// than its resting speed (a rocking body: the impact on one corner lifts the other),
+    /// which no impulse `≥ 0` at that instant can hold down.
     ///
-    /// DEVIATION (a truncation beyond the paper): when the hops of an accumulation fall
-    /// below what the event location resolves, the infinitely many impacts left are
-    /// replaced by one plastic impulse over the touching points, the least-squares
-    /// solution of
+    /// DEVIATION (a truncation beyond the paper): when the hops of a rocking accumulation
+    /// fall below what the event location resolves, the infinitely many impacts left are
+    /// replaced by the kinetic-metric projection of the velocity onto the closed contacts,
+    /// the least-squares solution of
     ///
     /// ```text
     /// W_rr P_r = −v_r⁻   (r: the normal rows, and the tangential rows of the points that
@@ -511,7 +533,7 @@ impl ImpactMap {
             .collect();
         self.jump(
             model,
-            ImpactCause::AccumulationEnd,
+            ImpactCause::RockingEnd,
             &set,
             &materials,
             &x,
@@ -612,11 +634,11 @@ impl ImpactMap {
                 w[(2 * i, 2 * i + 1)],
                 w[(2 * i + 1, 2 * i + 1)],
             );
-            let coefficients = Coefficients::new(
-                &block,
-                material.mu,
-                ContactVelocity::new(v_a.n.min(-Real::MIN_POSITIVE), v_a.t),
-            );
+            // A point that does not approach (|v_n| within rounding of 0) has no α: its
+            // coefficients get v_n = 0, and α = v_t / 0 is left out of the ledger.
+            let v_n = if v_a.n < -self.still { v_a.n } else { 0.0 };
+            let coefficients =
+                Coefficients::new(&block, material.mu, ContactVelocity::new(v_n, v_a.t));
             let phases = Phases::straight(v_a, kind, impulse, v_s);
             let end = *phases.end();
             let delta_e = energy_change(impulse, v_a, v_s);

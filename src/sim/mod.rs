@@ -73,9 +73,17 @@ pub struct Simulation<'m> {
     disarmed: Vec<bool>,
     /// The mode of each pair, for the samples.
     modes: Vec<PairMode>,
+    /// The slip direction of each pair, for the samples (see [`Sample::slips`]).
+    slips: Vec<i8>,
     /// The last instant of impacts on each pair and the fastest separation of its points
     /// then `(t, v_n)`: the last hop, for the ratio and duration of an accumulation.
     last_separation: Vec<Option<(Real, Real)>>,
+    /// The pairs whose accumulation of impacts ended at the current instant, until the
+    /// mode selection reports them.
+    accumulating: Vec<Option<contacts::Accumulation>>,
+    /// Changes of mode to report later: passages to persistent contact stamped at the
+    /// extrapolated end `t∞` of an accumulation (the samples before it show the old mode).
+    passages: Vec<contacts::Passage>,
     guard: Guard,
     /// Scratch state `y`.
     y: Vec<Real>,
@@ -110,12 +118,15 @@ impl<'m> Simulation<'m> {
             locator: EventLocator::new(n, gaps::SLOTS * npairs, LocatorSettings::default()),
             system,
             gaps: GapFunctions::new(model, scales),
-            map: ImpactMap::new(model),
+            map: ImpactMap::new(model).with_still(scales.v_drift),
             sampler: Data::new(model),
             armed: vec![false; gaps::SLOTS * npairs],
             disarmed: vec![false; npairs],
             modes: vec![PairMode::Free; npairs],
+            slips: vec![0; npairs],
             last_separation: vec![None; npairs],
+            accumulating: vec![None; npairs],
+            passages: Vec::new(),
             guard: Guard::new(),
             y: vec![0.0; n],
             gap_values: vec![0.0; npairs],
@@ -292,6 +303,10 @@ impl<'m> Simulation<'m> {
             if t > t_until || t > self.settings.t_end {
                 break;
             }
+            result = self.flush_passages(t, observer);
+            if result.is_err() {
+                break;
+            }
             if observer.wants_samples() {
                 if t == self.stepper.t() {
                     y.copy_from_slice(self.stepper.y());
@@ -337,6 +352,7 @@ impl<'m> Simulation<'m> {
             poses: &self.sampler.body_pose,
             at_impact,
             modes: &self.modes,
+            slips: &self.slips,
         };
         observer.sample(self.model, &sample).map_err(|e| e.at(t))?;
         self.counters.samples += 1;
@@ -375,6 +391,7 @@ impl<'m> Simulation<'m> {
         };
         // The last sample and message are best effort: the run is over either way. No
         // sample twice at the same instant (the output grid may have just taken it).
+        let _ = self.flush_passages(Real::INFINITY, observer);
         if self.last_sample_t != Some(t) {
             let _ = self.sample(t, &y, false, observer);
         }

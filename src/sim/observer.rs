@@ -26,6 +26,9 @@ pub struct Sample<'a> {
     pub at_impact: bool,
     /// The mode of every contact pair, in pair order.
     pub modes: &'a [PairMode],
+    /// The direction of the slip of every contact pair along its tangent `t = perp(n)`
+    /// (`n` from `b` to `a`): `+1` or `−1` when it slides, `0` otherwise.
+    pub slips: &'a [i8],
 }
 
 /// The mode of a contact pair: open, or closed and sticking or sliding (a pair with two
@@ -145,6 +148,8 @@ pub struct Recorder {
     pub transitions: Vec<Transition>,
     /// Every sample's time, coordinates, speeds and total energy, if `samples` is set.
     pub samples: Vec<(Real, Vec<Real>, Vec<Real>, Real)>,
+    /// Every sample's time and the modes of the pairs, if `samples` is set.
+    pub sample_modes: Vec<(Real, Vec<PairMode>)>,
     /// Whether to keep samples.
     pub keep_samples: bool,
 }
@@ -156,6 +161,7 @@ impl Observer for Recorder {
     fn sample(&mut self, _: &Model, s: &Sample<'_>) -> Result<(), ObserverError> {
         self.samples
             .push((s.t, s.q.to_vec(), s.u.to_vec(), s.energy.total()));
+        self.sample_modes.push((s.t, s.modes.to_vec()));
         Ok(())
     }
     fn impact(&mut self, _: &Model, impact: &ImpactEvent) -> Result<(), ObserverError> {

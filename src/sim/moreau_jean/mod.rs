@@ -215,6 +215,9 @@ pub struct MoreauJean<'m> {
     gap_values: Vec<Real>,
     /// The mode of each pair in the current step.
     modes: Vec<PairMode>,
+    /// The slip direction of each pair for the samples: 0 (time-stepping does not report
+    /// it).
+    slips: Vec<i8>,
     /// Steps taken; the run has `n_steps`.
     k: u64,
     n_steps: u64,
@@ -296,6 +299,7 @@ impl<'m> MoreauJean<'m> {
             sample_u: vec![0.0; nu],
             gap_values: vec![0.0; np],
             modes: vec![PairMode::Free; np],
+            slips: vec![0; np],
             k: 0,
             n_steps: 0,
             t0: 0.0,
@@ -758,6 +762,7 @@ impl<'m> MoreauJean<'m> {
             poses: &self.sampler.body_pose,
             at_impact: false,
             modes: &self.modes,
+            slips: &self.slips,
         };
         observer
             .sample(self.model, &sample)
