@@ -426,8 +426,11 @@ fn a_chain_with_more_contacts_than_the_enumeration_handles_stops_with_a_clear_er
     println!("{text}; {} impacts", rec.impacts.len());
     assert!(text.contains("more than the exact"), "{e}");
     assert!(text.contains("moreau-jean"), "{text}");
+    // (Since accumulations end with a plastic impact rather than a pulling one, the chain
+    // takes another path, and its many-point impact comes at 0.8062 s instead of after
+    // 0.82 s; the mode system of the old failure at 0.8209 s is no longer reached here.)
     assert!(
-        summary.state.t > 0.82 && summary.state.t < 1.0,
+        summary.state.t > 0.8 && summary.state.t < 1.0,
         "t = {}",
         summary.state.t
     );

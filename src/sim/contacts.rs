@@ -35,7 +35,7 @@ use crate::dynamics::forward_dynamics;
 use crate::events::Event;
 use crate::integrate::Stepper;
 use crate::kinematics::{update_positions, update_velocities};
-use crate::lcp::Mode;
+use crate::lcp::{self, Mode};
 use crate::math::{Real, Vec2};
 use crate::model::{Material, PairId};
 
@@ -335,7 +335,7 @@ impl Simulation<'_> {
             self.audit.impact_prescribed_work += ev.prescribed_work();
             observer.impact(self.model, &ev).map_err(|e| e.at(t))?;
             if let Some(reason) = self.guard.after_impact(t) {
-                return Ok(Some(self.accumulation(t, ev.frame.pair, reason)));
+                return Ok(Some(self.stall(t, ev.frame.pair, reason)));
             }
         }
         Ok(None)
@@ -612,10 +612,23 @@ impl Simulation<'_> {
             }
             1 => &sel.solutions[0],
             count => {
-                // The least constraint: the most open points.
-                let chosen = (sel.solutions.iter())
-                    .max_by_key(|s| s.modes.iter().filter(|m| **m == Mode::Open).count())
-                    .unwrap_or(&sel.solutions[0]);
+                // The least constraint: the most open points. A choice undone at once (the
+                // next event at the same instant asks again) gives way to the next one in
+                // that order, so the selection cannot chatter between the same sets.
+                let mut ranked: Vec<&lcp::Solution> = sel.solutions.iter().collect();
+                ranked.sort_by_key(|s| {
+                    std::cmp::Reverse(s.modes.iter().filter(|m| **m == Mode::Open).count())
+                });
+                let (t_prev, undone) = self.indeterminate;
+                let undone = if t - t_prev <= 1e-9 * (1.0 + t.abs()) {
+                    undone + 1
+                } else {
+                    0
+                };
+                self.indeterminate = (t, undone);
+                // One pass through the alternatives; then the first again.
+                let pick = if undone < ranked.len() { undone } else { 0 };
+                let chosen = ranked[pick];
                 let painleve: Vec<String> = (0..resting.len())
                     .filter(|&i| sliding_painleve(i))
                     .map(|i| pair_name(self.model, resting[i].pair))
@@ -632,7 +645,11 @@ impl Simulation<'_> {
                     .message(
                         t,
                         Level::Warning,
-                        &format!("{what} at t = {t} s ({count} consistent sets); chose the one with the most open contacts"),
+                        &if pick == 0 {
+                            format!("{what} at t = {t} s ({count} consistent sets); chose the one with the most open contacts")
+                        } else {
+                            format!("{what} at t = {t} s ({count} consistent sets); the last choice was undone at once: chose the next one by open contacts (#{})", pick + 1)
+                        },
                     )
                     .map_err(|e| e.at(t))?;
                 chosen

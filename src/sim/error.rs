@@ -15,18 +15,6 @@ use super::ObserverError;
 pub enum StopReason {
     /// It reached its end time.
     EndTime,
-    /// A contact no longer separates after its impacts (an accumulation of impacts, a
-    /// plastic impact, a resting contact): persistent contact is not modelled yet.
-    Accumulation {
-        /// Time (s).
-        t: Real,
-        /// The contact pair.
-        pair: usize,
-        /// Its name, `<collider a>/<collider b>`.
-        name: String,
-        /// What was seen.
-        reason: String,
-    },
     /// The caller asked it to stop (Ctrl-C).
     Interrupted {
         /// Time reached (s).
@@ -37,11 +25,10 @@ pub enum StopReason {
 }
 
 impl StopReason {
-    /// A short name for logs: `t_end`, `accumulation`, `interrupted`, `error`.
+    /// A short name for logs: `t_end`, `interrupted`, `error`.
     pub fn name(&self) -> &'static str {
         match self {
             StopReason::EndTime => "t_end",
-            StopReason::Accumulation { .. } => "accumulation",
             StopReason::Interrupted { .. } => "interrupted",
             StopReason::Failed(_) => "error",
         }
@@ -52,9 +39,6 @@ impl std::fmt::Display for StopReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             StopReason::EndTime => f.write_str("reached the end time"),
-            StopReason::Accumulation { name, reason, .. } => {
-                write!(f, "accumulation of impacts on {name}: {reason}")
-            }
             StopReason::Interrupted { .. } => f.write_str("interrupted"),
             StopReason::Failed(e) => {
                 // The whole chain: what failed, and why.

@@ -85,6 +85,9 @@ pub struct Simulation<'m> {
     /// extrapolated end `t∞` of an accumulation (the samples before it show the old mode).
     passages: Vec<contacts::Passage>,
     guard: Guard,
+    /// The last choice among several consistent contact modes: its time, and how many
+    /// times in a row a choice was undone at once (see `select_modes`).
+    indeterminate: (Real, usize),
     /// Scratch state `y`.
     y: Vec<Real>,
     /// Scratch gaps.
@@ -128,6 +131,7 @@ impl<'m> Simulation<'m> {
             accumulating: vec![None; npairs],
             passages: Vec::new(),
             guard: Guard::new(),
+            indeterminate: (Real::NEG_INFINITY, 0),
             y: vec![0.0; n],
             gap_values: vec![0.0; npairs],
             next_output: 0,
@@ -189,7 +193,7 @@ impl<'m> Simulation<'m> {
                     self.counters.events += 1;
                     self.settle(&event)?;
                     if let Some(reason) = self.guard.after_event(self.stepper.t()) {
-                        return Ok(self.accumulation(
+                        return Ok(self.stall(
                             self.stepper.t(),
                             PairId(event.index / gaps::SLOTS),
                             reason,
@@ -360,14 +364,19 @@ impl<'m> Simulation<'m> {
         Ok(())
     }
 
-    /// A stop for an accumulation (the final message goes to the log in [`Self::finish`]).
-    fn accumulation(&mut self, t: Real, pair: PairId, reason: String) -> StopReason {
-        StopReason::Accumulation {
+    /// A stop for a stall: impacts or events that keep coming without the time advancing
+    /// on `pair`. A failure, not an accumulation of impacts — those end in the contact
+    /// stage, with the passage to persistent contact (the final message goes to the log
+    /// in [`Self::finish`]).
+    fn stall(&mut self, t: Real, pair: PairId, reason: String) -> StopReason {
+        StopReason::Failed(SimError::Contact {
             t,
-            pair: pair.index(),
-            name: impact_map::pair_name(self.model, pair),
-            reason,
-        }
+            message: format!(
+                "the run stalls on {}: {reason} (impacts or contact-mode changes that repeat \
+                 at one instant and that the contact stage does not resolve)",
+                impact_map::pair_name(self.model, pair)
+            ),
+        })
     }
 
     /// Stage `finish`: the final sample, the energy audit and the counters.
@@ -386,7 +395,7 @@ impl<'m> Simulation<'m> {
         self.audit.contact_work = y[2 * n + 3];
         let level = match stop {
             StopReason::Failed(_) => Level::Error,
-            StopReason::Accumulation { .. } | StopReason::Interrupted { .. } => Level::Warning,
+            StopReason::Interrupted { .. } => Level::Warning,
             StopReason::EndTime => Level::Info,
         };
         // The last sample and message are best effort: the run is over either way. No

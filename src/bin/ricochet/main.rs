@@ -30,8 +30,8 @@ enum Command {
     Check(check::Args),
     /// Simulate a scene, write its MCAP log, print the impacts and the energy audit.
     ///
-    /// Exit status: 0 when the run reached its end time (or stopped on an accumulation of
-    /// impacts), 1 when it failed, 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
+    /// Exit status: 0 when the run reached its end time, 1 when it failed (a stall of
+    /// impacts or contact modes at one instant is a failure), 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
     /// 129 by SIGHUP. The first signal stops the run at its next step and finishes its log;
     /// a second one exits at once.
     Run(run::Args),

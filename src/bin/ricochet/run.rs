@@ -231,7 +231,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         printed => printed?,
     }
     Ok(match summary.stop {
-        StopReason::EndTime | StopReason::Accumulation { .. } => ExitCode::SUCCESS,
+        StopReason::EndTime => ExitCode::SUCCESS,
         StopReason::Interrupted { .. } => ExitCode::from(interrupted_status(signal)),
         StopReason::Failed(_) => ExitCode::FAILURE,
     })

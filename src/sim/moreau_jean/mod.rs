@@ -792,7 +792,7 @@ impl<'m> MoreauJean<'m> {
         });
         let level = match stop {
             StopReason::Failed(_) => Level::Error,
-            StopReason::Accumulation { .. } | StopReason::Interrupted { .. } => Level::Warning,
+            StopReason::Interrupted { .. } => Level::Warning,
             StopReason::EndTime => Level::Info,
         };
         // Best effort: the run is over either way. No sample twice at the same instant.
