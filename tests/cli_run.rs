@@ -997,3 +997,25 @@ fn chain_goes_through_the_old_stall_and_a_stall_is_a_failure() {
     let log = read_log(&dir.path().join("c10.mcap"));
     assert_eq!(log.last_state.as_ref().map(|s| s.t), Some(10.0));
 }
+
+/// Issue 11: `painleve_rod` with μ just under the Painlevé value 1.34715 (1.347, 1.3471)
+/// failed when the right-hand side of a trial stage had no contact forces (a state the
+/// solution never reaches): the run ended with "right-hand side failed". Such a stage now
+/// rejects the step, which shrinks; the run reaches its end time.
+#[test]
+fn painleve_rod_just_under_the_critical_friction_reaches_its_end_time() {
+    let dir = TempDir::new("painleve_mu");
+    let scene = scene_path("painleve_rod");
+    for mu in ["1.347", "1.3471"] {
+        let out = ricochet(
+            dir.path(),
+            &["run", scene.to_str().unwrap(), "--mu", mu, "-o", "p.mcap"],
+        );
+        let stdout = text(&out.stdout);
+        assert_eq!(out.status.code(), Some(0), "μ {mu}: {}", text(&out.stderr));
+        assert!(stdout.contains("reached the end time"), "μ {mu}: {stdout}");
+        // The trial stages without forces rejected steps.
+        let (_, _, rejected, _) = counters(&stdout);
+        assert!(rejected > 0, "μ {mu}: {stdout}");
+    }
+}

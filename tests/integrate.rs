@@ -819,3 +819,72 @@ fn output_stops_do_not_degrade_the_step_size() {
     let err = max_abs_diff(stopped.y(), &exact(&p, p.t1));
     assert!(err < 1e-8, "{err}");
 }
+
+/// A right-hand side that fails at a state the solution never reaches, but that a large
+/// trial step probes (issue 11: contact forces without solution at a trial stage): the
+/// step is rejected and shrinks, and the solution is still the closed form. ẏ = −10 y,
+/// y(0) = 1, whose stages at h = 0.5 go negative; the system refuses y < 0.
+#[test]
+fn a_failing_trial_stage_shrinks_the_step() {
+    struct Decay;
+    impl OdeSystem for Decay {
+        type Error = Singular;
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Singular> {
+            if y[0] < 0.0 {
+                return Err(Singular(t));
+            }
+            dy[0] = -10.0 * y[0];
+            Ok(())
+        }
+    }
+    // DOPRI5 starting at h = 0.5: its first trial fails and shrinks; then the controller.
+    let settings = Dopri5Settings {
+        rtol: 1e-10,
+        atol: 1e-20,
+        h_max: 0.5,
+        h_init: Some(0.5),
+        ..Default::default()
+    };
+    let mut d = Dopri5::new(1, settings).unwrap();
+    d.start(&mut Decay, 0.0, &[1.0]).unwrap();
+    while d.t() < 2.0 {
+        d.step(&mut Decay, 2.0).unwrap();
+    }
+    let (y, exact) = (d.y()[0], (-20.0f64).exp());
+    println!(
+        "dopri5: y(2) = {y:.9e} (exact {exact:.9e}, {:.1e}); {} rejected",
+        (y - exact).abs() / exact,
+        d.counters().rejected
+    );
+    assert!(d.counters().rejected > 0);
+    assert!((y - exact).abs() <= 1e-7 * exact);
+    // RK4 with dt = 0.5: every step's second stage is negative (1 − 2.5 y); each step is
+    // taken at dt/4 = 0.125 instead, so y(2) is the method's own amplification at
+    // z = −1.25, R(z) = 1 + z + z²/2 + z³/6 + z⁴/24, to the 16th power.
+    let settings = IntegratorSettings {
+        method: Method::Rk4,
+        dt: 0.5,
+        h_max: 0.5,
+        ..Default::default()
+    };
+    let mut s = AnyStepper::new(1, &settings).unwrap();
+    s.start(&mut Decay, 0.0, &[1.0]).unwrap();
+    // A far stop, so that no step is clipped to it: 16 steps of 0.125 s reach 2 s.
+    while s.t() < 2.0 {
+        s.step(&mut Decay, 100.0).unwrap();
+    }
+    assert_eq!(s.t(), 2.0);
+    let z: f64 = -1.25;
+    let r = 1.0 + z + z * z / 2.0 + z.powi(3) / 6.0 + z.powi(4) / 24.0;
+    let y = s.y()[0];
+    println!(
+        "rk4: y(2) = {y:.9e} (R(−1.25)¹⁶ = {:.9e}); {:?}",
+        r.powi(16),
+        s.counters()
+    );
+    assert!((y - r.powi(16)).abs() <= 1e-12 * r.powi(16));
+    assert_eq!((s.counters().steps, s.counters().rejected), (16, 16));
+}

@@ -453,10 +453,17 @@ impl Stepper for Dopri5 {
             return Err(IntegrateError::StopNotAhead { t: self.t, t_stop });
         }
         let mut non_finite_rejections = 0u32;
+        let mut rhs_failures = 0u32;
         loop {
             let (h, reaches) = clip_step(self.h, self.h_max, t_stop - self.t);
             let t1 = if reaches { t_stop } else { self.t + h };
-            stages(
+            // A right-hand side that fails at a trial stage (a state the accepted solution
+            // never reaches, such as a contact problem without solution far from it)
+            // rejects the step: it shrinks by 4 and is tried again, down to the smallest
+            // step (or 30 failures in a row, a factor 1e18), where the failure is returned.
+            // Stage 1 is the accepted state, already evaluated: a failure there is never
+            // retried.
+            match stages(
                 sys,
                 self.t,
                 &self.y,
@@ -464,7 +471,20 @@ impl Stepper for Dopri5 {
                 t1,
                 &mut self.st,
                 &mut self.counters,
-            )?;
+            ) {
+                Ok(()) => {}
+                Err(e @ IntegrateError::Rhs { .. }) => {
+                    self.counters.rejected += 1;
+                    rhs_failures += 1;
+                    let h_new = 0.25 * h;
+                    if rhs_failures >= 30 || h_new < smallest_step(self.settings.h_min, self.t) {
+                        return Err(e);
+                    }
+                    self.h = h_new;
+                    continue;
+                }
+                Err(e) => return Err(e),
+            }
             let err = if all_finite(&self.st.y_new) {
                 let m = sys.controlled().min(self.n);
                 error_norm(

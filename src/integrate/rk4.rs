@@ -258,17 +258,38 @@ impl Stepper for Rk4 {
         if t_stop.is_nan() || t_stop <= self.t {
             return Err(IntegrateError::StopNotAhead { t: self.t, t_stop });
         }
-        let (h, reaches) = clip_step(self.settings.dt, self.h_max, t_stop - self.t);
-        let t1 = if reaches { t_stop } else { self.t + h };
-        rk4_step(
-            sys,
-            self.t,
-            &self.y,
-            &self.f,
-            t1,
-            &mut self.st,
-            &mut self.counters,
-        )?;
+        let (mut h, mut reaches) = clip_step(self.settings.dt, self.h_max, t_stop - self.t);
+        let mut t1 = if reaches { t_stop } else { self.t + h };
+        // A right-hand side that fails at a trial stage (a state the solution never
+        // reaches) shortens this step by 4 and tries again, at most 30 times (a factor
+        // 1e18) and down to `10 ε |t|`, where the failure is returned; the next step is
+        // `dt` again. Stage 1 is the accepted state,
+        // already evaluated: a failure there is never retried.
+        let mut failures = 0u32;
+        loop {
+            match rk4_step(
+                sys,
+                self.t,
+                &self.y,
+                &self.f,
+                t1,
+                &mut self.st,
+                &mut self.counters,
+            ) {
+                Ok(()) => break,
+                Err(e @ IntegrateError::Rhs { .. }) => {
+                    self.counters.rejected += 1;
+                    failures += 1;
+                    h *= 0.25;
+                    if failures >= 30 || h < 10.0 * Real::EPSILON * self.t.abs() {
+                        return Err(e);
+                    }
+                    reaches = false;
+                    t1 = self.t + h;
+                }
+                Err(e) => return Err(e),
+            }
+        }
         if !all_finite(&self.st.y_new) || !all_finite(&self.st.f_new) {
             return Err(IntegrateError::NonFinite { t: t1 });
         }

@@ -184,10 +184,20 @@ impl<'m> Simulation<'m> {
                 return Ok(StopReason::EndTime);
             }
             self.stepper.step(&mut self.system, t_end)?;
-            match self
-                .locator
-                .locate(&self.stepper, &mut self.gaps, &self.armed)?
-            {
+            let Some(found) = self.locate()? else {
+                // The closed contacts have no forces from some instant inside the step on
+                // (a mode that stops being consistent): the run is now just before it;
+                // the contact stage selects the modes there again.
+                self.samples_until(self.stepper.t(), observer)?;
+                if let Some(stop) = self.contacts(None, observer)? {
+                    return Ok(stop);
+                }
+                if let Some(reason) = self.guard.after_event(self.stepper.t()) {
+                    return Ok(self.stall(self.stepper.t(), PairId(0), reason));
+                }
+                continue;
+            };
+            match found {
                 None => self.samples_until(self.stepper.t(), observer)?,
                 Some(event) => {
                     self.counters.events += 1;
@@ -280,6 +290,38 @@ impl<'m> Simulation<'m> {
             self.armed[gaps::slot(c.pair, 1 + 3 * j)] = true;
             self.armed[gaps::slot(c.pair, 2 + 3 * j)] = true;
             self.armed[gaps::slot(c.pair, 3 + 3 * j)] = matches!(c.hold, Hold::Slide(_));
+        }
+    }
+
+    /// Stage `locate`: the first event in the last step, `Some(None)` if there is none.
+    /// When the event functions cannot be evaluated inside the step (the forces of the
+    /// closed contacts have no solution from some instant `t_f` on: a mode that stops
+    /// being consistent), the step is taken again up to halfway to `t_f`, until `t_f` is
+    /// within `1e-12 (1 + |t|)` of its end; then `None`: the contact stage must select
+    /// the modes again there.
+    fn locate(&mut self) -> Result<Option<Option<Event>>, SimError> {
+        loop {
+            match self
+                .locator
+                .locate(&self.stepper, &mut self.gaps, &self.armed)
+            {
+                Ok(found) => return Ok(Some(found)),
+                Err(crate::events::EventError::Function { t: t_f, source }) => {
+                    let (t0, t1) = (self.stepper.t_prev(), self.stepper.t());
+                    if !(t_f > t0 && t_f <= t1) {
+                        let e: crate::events::EventError<Nested> =
+                            crate::events::EventError::Function { t: t_f, source };
+                        return Err(e.into());
+                    }
+                    if t_f - t0 <= 1e-12 * (1.0 + t0.abs()) {
+                        self.stepper.restep_to(&mut self.system, t0)?;
+                        return Ok(None);
+                    }
+                    self.stepper
+                        .restep_to(&mut self.system, t0 + 0.5 * (t_f - t0))?;
+                }
+                Err(e) => return Err(e.into()),
+            }
         }
     }
 
