@@ -251,8 +251,7 @@ impl Simulation<'_> {
             .fold(Real::INFINITY, Real::min);
         if v.is_finite() {
             let h = 10.0 * self.scales.gap_tol / v;
-            self.stepper
-                .set_h_max(h.min(self.settings.integrator.h_max));
+            self.h_max_base = h.min(self.settings.integrator.h_max);
         }
         self.arm();
     }
