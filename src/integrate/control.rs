@@ -138,6 +138,15 @@ pub(crate) fn smallest_step(h_min: Real, t: Real) -> Real {
     h_min.max(10.0 * Real::EPSILON * t.abs())
 }
 
+/// After a right-hand side failed at a trial stage (a state the accepted solution never
+/// reaches): the step to try next, `h / 4`, counting the failure in `failures`; `None` —
+/// the failure is returned — after 30 in a row (a factor 1e18) or below `h_min`.
+pub(crate) fn after_failed_stage(h: Real, failures: &mut u32, h_min: Real) -> Option<Real> {
+    *failures += 1;
+    let h_new = 0.25 * h;
+    (*failures < 30 && h_new >= h_min).then_some(h_new)
+}
+
 /// Scaled squared norms used by the initial step guess [HNW, II.4, p. 169]:
 /// `Σ (vᵢ / skᵢ)²` with `skᵢ = atol + rtol |y₀ᵢ|` (no division by `n`, as in `HINIT`).
 pub(crate) fn scaled_sq(v: &[Real], y0: &[Real], rtol: Real, atol: Real) -> Real {

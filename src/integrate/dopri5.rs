@@ -6,7 +6,9 @@
 //! previous step's stage 7). At `start`: 1 evaluation, plus 1 for the initial step guess
 //! when `h_init` is not given. A re-step to an event time costs 6.
 
-use super::control::{PiController, clip_step, error_norm, scaled_sq, smallest_step};
+use super::control::{
+    PiController, after_failed_stage, clip_step, error_norm, scaled_sq, smallest_step,
+};
 use super::dense::Dense;
 use super::error::{require_non_negative, require_positive};
 use super::tableau::*;
@@ -475,11 +477,10 @@ impl Stepper for Dopri5 {
                 Ok(()) => {}
                 Err(e @ IntegrateError::Rhs { .. }) => {
                     self.counters.rejected += 1;
-                    rhs_failures += 1;
-                    let h_new = 0.25 * h;
-                    if rhs_failures >= 30 || h_new < smallest_step(self.settings.h_min, self.t) {
+                    let h_min = smallest_step(self.settings.h_min, self.t);
+                    let Some(h_new) = after_failed_stage(h, &mut rhs_failures, h_min) else {
                         return Err(e);
-                    }
+                    };
                     self.h = h_new;
                     continue;
                 }

@@ -11,7 +11,7 @@
 //! `f₁ = f(t₁, y₁)`, needed by the interpolant, is evaluated at the end of each step and
 //! is the next step's `k₁`: 4 evaluations per step, plus 1 at `start` and after a reset.
 
-use super::control::clip_step;
+use super::control::{after_failed_stage, clip_step, smallest_step};
 use super::dense::Dense;
 use super::dopri5::all_finite;
 use super::error::require_positive;
@@ -263,8 +263,8 @@ impl Stepper for Rk4 {
         // A right-hand side that fails at a trial stage (a state the solution never
         // reaches) shortens this step by 4 and tries again, at most 30 times (a factor
         // 1e18) and down to `10 ε |t|`, where the failure is returned; the next step is
-        // `dt` again. Stage 1 is the accepted state,
-        // already evaluated: a failure there is never retried.
+        // `dt` again. Stage 1 is the accepted state, already evaluated: a failure there is
+        // never retried.
         let mut failures = 0u32;
         loop {
             match rk4_step(
@@ -279,11 +279,11 @@ impl Stepper for Rk4 {
                 Ok(()) => break,
                 Err(e @ IntegrateError::Rhs { .. }) => {
                     self.counters.rejected += 1;
-                    failures += 1;
-                    h *= 0.25;
-                    if failures >= 30 || h < 10.0 * Real::EPSILON * self.t.abs() {
+                    let h_min = smallest_step(0.0, self.t);
+                    let Some(h_new) = after_failed_stage(h, &mut failures, h_min) else {
                         return Err(e);
-                    }
+                    };
+                    h = h_new;
                     reaches = false;
                     t1 = self.t + h;
                 }

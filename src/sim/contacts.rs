@@ -764,16 +764,7 @@ impl Simulation<'_> {
             .min_by(|&i, &j| self.passages[i].t.total_cmp(&self.passages[j].t))
         {
             let p = self.passages.remove(i);
-            self.modes[p.pair.index()] = p.to;
-            self.slips[p.pair.index()] = p.slip;
-            self.report(
-                p.t,
-                p.pair,
-                (p.from, p.to),
-                p.note,
-                p.t_accumulation,
-                observer,
-            )?;
+            self.emit_passage(p, observer)?;
         }
         Ok(())
     }
@@ -789,18 +780,23 @@ impl Simulation<'_> {
         while let Some(i) = self.passages.iter().position(|p| p.pair == pair) {
             let mut p = self.passages.remove(i);
             p.t = p.t.min(t);
-            self.modes[p.pair.index()] = p.to;
-            self.slips[p.pair.index()] = p.slip;
-            self.report(
-                p.t,
-                p.pair,
-                (p.from, p.to),
-                p.note,
-                p.t_accumulation,
-                observer,
-            )?;
+            self.emit_passage(p, observer)?;
         }
         Ok(())
+    }
+
+    /// Makes a pending passage the mode shown, and reports it at its time.
+    fn emit_passage(&mut self, p: Passage, observer: &mut dyn Observer) -> Result<(), SimError> {
+        self.modes[p.pair.index()] = p.to;
+        self.slips[p.pair.index()] = p.slip;
+        self.report(
+            p.t,
+            p.pair,
+            (p.from, p.to),
+            p.note,
+            p.t_accumulation,
+            observer,
+        )
     }
 
     /// Reports a change of mode of `pair` on the log and to the observer.
