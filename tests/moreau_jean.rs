@@ -537,22 +537,9 @@ fn ricochet_run_with_moreau_jean_writes_the_same_kind_of_log() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A small deterministic generator (xorshift64*), so that every run sees the same
-/// problems.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+#[path = "common/rng.rs"]
+mod rng;
+use rng::Rng;
 
 /// A random contact problem: `A = J M⁻¹ Jᵀ` (2m × 2m) from a random `J` (2m × nu) and a
 /// random diagonal `M`, `b` in [−1, 1], `μ` in [0, mu_max].

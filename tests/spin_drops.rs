@@ -17,20 +17,9 @@ use ricochet::sim::{MaterialOverride, Recorder, Simulation};
 const G: f64 = 9.81;
 const T_MAX: f64 = 0.6;
 
-/// xorshift64*: a fixed sequence, no dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+#[path = "common/rng.rs"]
+mod rng;
+use rng::Rng;
 
 /// A body shape: its TOML and its parry shape, and the largest distance of its points
 /// from the body origin (the centre of mass).
@@ -42,7 +31,7 @@ struct BodyShape {
 
 fn body_shape(rng: &mut Rng) -> BodyShape {
     let f = |p: Vector| format!("[{}, {}]", p.x, p.y);
-    match (rng.next() * 4.0) as usize {
+    match rng.pick(4) {
         0 => {
             let (l, th) = (rng.range(0.05, 0.4), rng.range(0.0, 6.3));
             let a = Vector::new(l * th.cos(), l * th.sin());
@@ -77,7 +66,7 @@ fn body_shape(rng: &mut Rng) -> BodyShape {
         _ => {
             // A convex polygon: points on an ellipse at increasing angles.
             let (ax, ay) = (rng.range(0.05, 0.3), rng.range(0.005, 0.2));
-            let k = 3 + (rng.next() * 5.0) as usize;
+            let k = 3 + rng.pick(5);
             let mut angles: Vec<f64> = (0..k)
                 .map(|_| rng.range(0.0, std::f64::consts::TAU))
                 .collect();
@@ -102,7 +91,7 @@ fn body_shape(rng: &mut Rng) -> BodyShape {
 fn obstacle(rng: &mut Rng) -> (String, Box<dyn Shape>, Pose) {
     let tilt = rng.range(-0.9, 0.9);
     let dir = Vector::new(tilt.cos(), tilt.sin());
-    match (rng.next() * 3.0) as usize {
+    match rng.pick(3) {
         0 => {
             let l = rng.range(0.1, 0.6);
             let (a, b) = (-dir * l, dir * l);
