@@ -35,7 +35,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 pub use accumulation::Scales;
 pub use error::{AtTime, Nested, SimError, StopReason};
 pub use gaps::GapFunctions;
-pub use impact_map::{ImpactCause, ImpactEvent, ImpactMap, MaterialOverride};
+pub use impact_map::{ImpactCause, ImpactEvent, ImpactMap, MaterialOverride, Support};
 pub use moreau_jean::{MoreauJean, MoreauJeanSettings, SolverReport};
 pub use observer::{
     Level, NullObserver, Observer, ObserverError, PairMode, Recorder, Sample, Transition,
