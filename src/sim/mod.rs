@@ -118,12 +118,17 @@ impl<'m> Simulation<'m> {
         let system = MotionSystem::new(model, scales);
         let n = crate::integrate::OdeSystem::dim(&system);
         let npairs = model.pairs().len();
+        let mut stepper = AnyStepper::new(n, &settings.integrator)?;
+        // A step below 10 ε t_end cannot bring the run to its end: it is lost in the
+        // rounding of any time near t_end. (The floor 10 ε |t| alone is 0 at t = 0, where a
+        // run whose steps kept shrinking never failed.)
+        stepper.set_h_min(10.0 * Real::EPSILON * settings.t_end.abs());
         Ok(Self {
             model,
             settings: settings.clone(),
             overrides,
             scales,
-            stepper: AnyStepper::new(n, &settings.integrator)?,
+            stepper,
             locator: EventLocator::new(n, gaps::SLOTS * npairs, LocatorSettings::default()),
             system,
             gaps: GapFunctions::new(model, scales),
