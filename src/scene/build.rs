@@ -128,7 +128,7 @@ pub(super) fn build(
     })
 }
 
-/// `[run]` → [`Settings`]: positive finite times, rates and tolerances.
+/// `[run]` → [`Settings`]: positive finite times, rates, tolerances and drift budget.
 fn settings(run: &RunSpec, loc: &Locator<'_>) -> Result<Settings, SceneError> {
     let positive = |v: &Spanned<Real>, what: &str| -> Result<Real, SceneError> {
         let x = *v.get_ref();
@@ -147,6 +147,9 @@ fn settings(run: &RunSpec, loc: &Locator<'_>) -> Result<Settings, SceneError> {
     };
     if let Some(rate) = &run.output_rate {
         settings.output_rate = positive(rate, "the output rate")?;
+    }
+    if let Some(budget) = &run.max_drift {
+        settings.max_drift = Some(positive(budget, "the drift budget max_drift")?);
     }
     let mut integ = IntegratorSettings::default();
     if let Some(spec) = &run.integrator {
