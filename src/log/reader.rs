@@ -60,6 +60,10 @@ pub struct RunLog {
     pub impacts: Vec<ImpactRecord>,
     /// The last `/state` sample read.
     pub last_state: Option<StateRecord>,
+    /// Every `/state` sample, in file order, when read by [`read_all`] or
+    /// [`read_bytes_all`]; empty from [`read`] and [`read_bytes`], which decode the last
+    /// one only.
+    pub states: Vec<StateRecord>,
     /// Number of messages read per topic (every channel in the file, ricochet's or not).
     pub message_counts: BTreeMap<String, u64>,
     /// Smallest and largest message log time (s), if any message was read.
@@ -85,6 +89,23 @@ pub fn read(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
     read_bytes(&bytes)
 }
 
+/// Reads the log at `path` with every `/state` sample in [`RunLog::states`] (see
+/// [`read_bytes`]).
+pub fn read_all(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| LogError::Open {
+        path: path.to_owned(),
+        source,
+    })?;
+    read_bytes_all(&bytes)
+}
+
+/// Reads a log held in memory, as [`read_bytes`] does, with every `/state` sample in
+/// [`RunLog::states`].
+pub fn read_bytes_all(bytes: &[u8]) -> Result<RunLog, LogError> {
+    read_log(bytes, true)
+}
+
 /// Reads a log held in memory, as far as it goes.
 ///
 /// Errors only when the bytes are not an MCAP file at all, or when a record of ricochet's
@@ -96,6 +117,11 @@ pub fn read(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
 /// (the tests have it, through the `jsonschema` dev-dependency); without it about 7 % of
 /// arbitrary `f64`s come back one ulp off.
 pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
+    read_log(bytes, false)
+}
+
+/// Reads a log, decoding every `/state` sample if `all_states`, else only the last.
+fn read_log(bytes: &[u8], all_states: bool) -> Result<RunLog, LogError> {
     let mut log = RunLog {
         library: String::new(),
         format_version: 1,
@@ -104,6 +130,7 @@ pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
         audit: None,
         impacts: vec![],
         last_state: None,
+        states: vec![],
         message_counts: BTreeMap::new(),
         time_range: None,
         ending: Ending::Complete,
@@ -146,6 +173,9 @@ pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
                 });
                 match Topic::from_name(topic) {
                     Some(Topic::Impacts) => log.impacts.push(decode(Topic::Impacts.name(), &data)?),
+                    Some(Topic::State) if all_states => {
+                        log.states.push(decode(Topic::State.name(), &data)?);
+                    }
                     Some(Topic::State) => last_state = Some(data.into_owned()),
                     _ => {}
                 }
@@ -159,6 +189,8 @@ pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
     }
     if let Some(data) = last_state {
         log.last_state = Some(decode(Topic::State.name(), &data)?);
+    } else {
+        log.last_state = log.states.last().cloned();
     }
     Ok(log)
 }
