@@ -112,6 +112,17 @@ fn run_summary_and_inspect_json_are_the_same_document() {
             .count(),
         n + doc["checkpoints"].as_array().unwrap().len()
     );
+    // A summary that cannot be written fails before the run, leaving no log.
+    let (_, err) = expect(
+        dir.path(),
+        &["run", &kane, "-o", "no.mcap", "--summary", "missing/k.json"],
+        1,
+    );
+    assert!(
+        err.contains("cannot create the summary missing/k.json"),
+        "{err}"
+    );
+    assert!(!dir.join("no.mcap").exists());
     // Fewer checkpoints on request.
     let (two, _) = expect(
         dir.path(),

@@ -208,6 +208,7 @@ fn one_impact_less_is_a_difference_at_its_time() {
         .find(|q| q.name == "impacts.count")
         .unwrap();
     assert_eq!(count.beyond, 2, "the unmatched impact and the total");
+    assert_eq!(count.compared, 2);
     let unmatched = count.first.as_ref().unwrap();
     assert_eq!(
         unmatched.place,

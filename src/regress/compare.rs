@@ -474,6 +474,7 @@ impl Comparer {
                         })
                     };
                     let k = self.quantity("impacts.count", Kind::Exact);
+                    self.quantities[k].compared += 1;
                     self.beyond(
                         k,
                         Difference {

@@ -168,7 +168,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Runner::MoreauJean(mj) => mj.scales().gap_tol,
     };
     let live = crate::live::start(&args.live)?;
-    let writer = LogWriter::create(&output, LogOptions::default())?;
+    // The summary's file is created before the run, so that a path that cannot be written
+    // fails at once, not after the run.
+    let summary_file = (args.summary.as_ref())
+        .map(|path| {
+            std::fs::File::create(path)
+                .with_context(|| format!("cannot create the summary {}", path.display()))
+        })
+        .transpose()?;
+    let writer = LogWriter::create(&output, LogOptions::default()).inspect_err(|_| {
+        if let Some(path) = &args.summary {
+            let _ = std::fs::remove_file(path);
+        }
+    })?;
     let log = RunLogger::new(
         writer,
         &scene.model,
@@ -216,9 +228,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("cannot finish the log {}", output.display()))?;
 
     let document = (terminal.collector).finish(&scene, (&scene.settings, &overrides), &summary);
-    if let Some(path) = &args.summary {
-        document
-            .write(path)
+    if let (Some(mut file), Some(path)) = (summary_file, &args.summary) {
+        let text = (document.to_json())
+            .with_context(|| format!("cannot write the summary {}", path.display()))?;
+        (file.write_all(text.as_bytes()))
             .with_context(|| format!("cannot write the summary {}", path.display()))?;
     }
     let drift = document.drift;
