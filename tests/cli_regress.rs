@@ -10,7 +10,8 @@
 //!   message naming the file;
 //! - `golden record` then `golden check` on an unchanged tree: exit 0; a one-line change
 //!   of a mass in one scene: exit 1 naming that scene, the other ok; `--update`, then
-//!   exit 0; a scene gone: exit 2;
+//!   exit 0; a coefficient changed: exit 1 naming impact #0 and `v_s.n`, the table with
+//!   `--verbose`, the same exit with stdout closed; a scene gone: exit 2;
 //! - drift budgets: `--max-drift` and `[run] max_drift` met (exit 0) and broken (exit 1,
 //!   by how much, with a finished log); `golden check` of a scene that breaks its budget.
 
@@ -392,6 +393,28 @@ fn golden_record_check_update() {
         "{out}"
     );
     assert!(out.contains("v_s.n"), "{out}");
+
+    let (out, _) = expect(d, &["golden", "check", "--dir", "golden", "--verbose"], 1);
+    assert!(
+        out.contains("first beyond the tolerances") && out.contains("B  pendulum_wall now"),
+        "{out}"
+    );
+    // A reader that stops reading (`| head`) does not change the verdict.
+    let mut child = Command::new(BIN)
+        .args(["golden", "check", "--dir", "golden", "--verbose"])
+        .current_dir(d)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     // A scene gone, a broken golden file: exit 2, the others still checked.
     std::fs::remove_file(&wall).unwrap();

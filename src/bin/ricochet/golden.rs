@@ -3,6 +3,7 @@
 //! moved or broke its drift budget, 2 on an error (a missing scene, an unreadable file).
 
 use std::collections::BTreeMap;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -14,6 +15,13 @@ use ricochet::math::Real;
 use ricochet::regress::compare::{DEFAULT_ATOL, DEFAULT_RTOL, DEFAULT_TIME_TOL};
 use ricochet::regress::golden::{self, Checked};
 use ricochet::regress::{DEFAULT_CHECKPOINTS, RunOverrides, Tolerances};
+
+/// `println!` through an [`Out`].
+macro_rules! say {
+    ($out:expr, $($arg:tt)*) => {
+        $out.line(format!($($arg)*))?
+    };
+}
 
 /// Options of `ricochet golden`.
 #[derive(clap::Args)]
@@ -90,6 +98,9 @@ struct CheckArgs {
     /// their overrides and tolerances).
     #[arg(long)]
     update: bool,
+    /// Also print the comparison table of each scene that moved (as `ricochet compare`).
+    #[arg(short, long)]
+    verbose: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
@@ -147,6 +158,7 @@ fn record(args: &RecordArgs) -> anyhow::Result<ExitCode> {
     }
     std::fs::create_dir_all(&args.dir)
         .with_context(|| format!("cannot create the folder {}", args.dir.display()))?;
+    let mut out = Out::default();
     let (mut errors, mut drifts) = (0, 0);
     for scene in &args.scenes {
         match golden::record(
@@ -160,7 +172,8 @@ fn record(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                 let stop = (s.audit.as_ref())
                     .map(|a| format!("stopped at t = {} s, {}", a.t_stop, a.stop_reason))
                     .unwrap_or_default();
-                println!(
+                say!(
+                    out,
                     "recorded {} → {}: {} impacts, {} checkpoints, {stop}",
                     scene.display(),
                     path.display(),
@@ -169,12 +182,13 @@ fn record(args: &RecordArgs) -> anyhow::Result<ExitCode> {
                 );
                 if let Some(d) = s.drift.filter(|d| d.broken()) {
                     drifts += 1;
-                    println!("DRIFT    {}: {}", scene.display(), d.describe());
+                    say!(out, "DRIFT    {}: {}", scene.display(), d.describe());
                 }
             }
             Err(err) => {
                 errors += 1;
-                println!(
+                say!(
+                    out,
                     "ERROR    {}: {:#}",
                     scene.display(),
                     anyhow::Error::new(err)
@@ -195,6 +209,7 @@ fn check(args: &CheckArgs) -> anyhow::Result<ExitCode> {
             args.dir.display()
         );
     }
+    let mut out = Out::default();
     let (mut ok, mut moved, mut updated, mut drifts, mut errors) = (0, 0, 0, 0, 0);
     for file in &files {
         let name = file
@@ -204,7 +219,7 @@ fn check(args: &CheckArgs) -> anyhow::Result<ExitCode> {
             Ok(c) => c,
             Err(err) => {
                 errors += 1;
-                println!("ERROR    {name}: {:#}", anyhow::Error::new(err));
+                say!(out, "ERROR    {name}: {:#}", anyhow::Error::new(err));
                 continue;
             }
         };
@@ -217,7 +232,8 @@ fn check(args: &CheckArgs) -> anyhow::Result<ExitCode> {
         let c = &checked.comparison;
         if !checked.moved() {
             ok += 1;
-            println!(
+            say!(
+                out,
                 "ok       {scene} ({name}): {} impacts, {} values within the tolerances{changed}",
                 checked.fresh.impacts.len(),
                 c.compared
@@ -233,29 +249,63 @@ fn check(args: &CheckArgs) -> anyhow::Result<ExitCode> {
                     .update()
                     .with_context(|| format!("cannot update {}", file.display()))?;
                 updated += 1;
-                println!("UPDATED  {scene} ({name}): was {first}; {verdict}{changed}");
+                say!(
+                    out,
+                    "UPDATED  {scene} ({name}): was {first}; {verdict}{changed}"
+                );
             } else {
                 moved += 1;
-                println!("MOVED    {scene} ({name}): {first}; {verdict}{changed}");
+                say!(
+                    out,
+                    "MOVED    {scene} ({name}): {first}; {verdict}{changed}"
+                );
+            }
+            if args.verbose {
+                let fresh = format!("{scene} now");
+                say!(out, "{}", c.to_text((&file.display().to_string(), &fresh)));
             }
         }
         if let Some(d) = checked.drift().filter(|d| d.broken()) {
             drifts += 1;
-            println!("DRIFT    {scene} ({name}): {}", d.describe());
+            say!(out, "DRIFT    {scene} ({name}): {}", d.describe());
         }
     }
-    println!(
+    say!(
+        out,
         "{} golden files in {}: {ok} ok, {moved} moved, {updated} updated, {drifts} beyond their drift budget, {errors} errors",
         files.len(),
         args.dir.display()
     );
-    if moved > 0 {
-        println!(
-            "the table of a moved scene: `ricochet run SCENE --summary new.json`, then \
-             `ricochet compare GOLDEN new.json` (with the golden file's overrides)"
+    if moved > 0 && !args.verbose {
+        say!(
+            out,
+            "the tables of what moved: `ricochet golden check --dir {} --verbose`",
+            args.dir.display()
         );
     }
     Ok(exit(errors, moved + drifts))
+}
+
+/// Standard output that a closed pipe silences (`ricochet golden check … | head`): the
+/// checks go on, and the exit status still says how they went.
+#[derive(Default)]
+struct Out {
+    closed: bool,
+}
+
+impl Out {
+    fn line(&mut self, text: String) -> anyhow::Result<()> {
+        if self.closed {
+            return Ok(());
+        }
+        match writeln!(std::io::stdout().lock(), "{text}") {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.closed = true;
+                Ok(())
+            }
+            other => Ok(other?),
+        }
+    }
 }
 
 /// 2 if anything failed, else 1 if anything moved or drifted, else 0.

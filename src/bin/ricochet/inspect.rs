@@ -33,8 +33,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let text = summary
             .to_json()
             .with_context(|| format!("cannot summarize {}", args.file.display()))?;
-        print!("{text}");
-        return Ok(ExitCode::SUCCESS);
+        use std::io::Write as _;
+        return match std::io::stdout().lock().write_all(text.as_bytes()) {
+            // A closed pipe (`ricochet inspect … --json | head`) is not an error of the log.
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+            _ => Ok(ExitCode::SUCCESS),
+        };
     }
     let log = ricochet::log::read(&args.file)
         .with_context(|| format!("cannot inspect {}", args.file.display()))?;
