@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use ricochet::math::Real;
-use ricochet::regress::compare::{DEFAULT_ATOL, DEFAULT_RTOL, DEFAULT_TIME_TOL};
 use ricochet::regress::{Tolerances, compare, read_run};
 
 /// Options of `ricochet compare`.
@@ -16,14 +15,15 @@ pub struct Args {
     a: PathBuf,
     /// Run B, likewise.
     b: PathBuf,
-    /// Relative tolerance: |a − b| ≤ atol + rtol·max(|a|, |b|) (energies: max(|a|, |b|, E_ref)).
-    #[arg(long, default_value_t = DEFAULT_RTOL, allow_negative_numbers = true)]
+    /// Relative tolerance: |a − b| ≤ atol + rtol·max(|a|, |b|, S), S the field's largest
+    /// magnitude in either run (for energies, the run's energy scale).
+    #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     rtol: Real,
     /// Absolute tolerance, in the unit of each quantity.
-    #[arg(long, default_value_t = DEFAULT_ATOL, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-12", allow_negative_numbers = true)]
     atol: Real,
     /// Tolerance on times: impact times, sample times, the stop time (s).
-    #[arg(long, default_value_t = DEFAULT_TIME_TOL, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     time_tol: Real,
     /// Print the comparison as JSON (`format = "ricochet.comparison"`).
     #[arg(long)]
@@ -67,4 +67,28 @@ fn compare_runs(args: &Args) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+    use ricochet::regress::Tolerances;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: super::Args,
+    }
+
+    #[test]
+    fn the_defaults_are_the_librarys() {
+        let cli = Cli::parse_from(["compare", "a", "b"]);
+        let a = &cli.args;
+        let tol = Tolerances {
+            rtol: a.rtol,
+            atol: a.atol,
+            time_tol: a.time_tol,
+        };
+        assert_eq!(tol, Tolerances::default());
+    }
 }

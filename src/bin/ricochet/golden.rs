@@ -12,7 +12,6 @@ use clap::Subcommand;
 use ricochet::impact::Law;
 use ricochet::integrate::Method;
 use ricochet::math::Real;
-use ricochet::regress::compare::{DEFAULT_ATOL, DEFAULT_RTOL, DEFAULT_TIME_TOL};
 use ricochet::regress::golden::{self, Checked};
 use ricochet::regress::{DEFAULT_CHECKPOINTS, RunOverrides, Tolerances};
 
@@ -75,13 +74,13 @@ struct RecordArgs {
     #[arg(long, allow_negative_numbers = true)]
     max_drift: Option<Real>,
     /// Relative tolerance of the comparison, written in the golden file.
-    #[arg(long, default_value_t = DEFAULT_RTOL, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     cmp_rtol: Real,
     /// Absolute tolerance of the comparison, written in the golden file.
-    #[arg(long, default_value_t = DEFAULT_ATOL, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-12", allow_negative_numbers = true)]
     cmp_atol: Real,
     /// Tolerance on times of the comparison (s), written in the golden file.
-    #[arg(long, default_value_t = DEFAULT_TIME_TOL, allow_negative_numbers = true)]
+    #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     time_tol: Real,
     /// About how many checkpoints (states on the output grid) to keep.
     #[arg(long, default_value_t = DEFAULT_CHECKPOINTS, value_name = "N")]
@@ -323,4 +322,28 @@ fn scene_name(c: &Checked) -> String {
     (c.golden.summary.scene.as_ref())
         .map(|s| s.name.clone())
         .unwrap_or_else(|| c.golden.scene.clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+    use ricochet::regress::Tolerances;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: super::RecordArgs,
+    }
+
+    #[test]
+    fn the_defaults_are_the_librarys() {
+        let cli = Cli::parse_from(["record", "x.toml", "--dir", "g"]);
+        let a = &cli.args;
+        let tol = Tolerances {
+            rtol: a.cmp_rtol,
+            atol: a.cmp_atol,
+            time_tol: a.time_tol,
+        };
+        assert_eq!(tol, Tolerances::default());
+    }
 }
