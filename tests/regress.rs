@@ -99,7 +99,7 @@ fn a_run_and_its_log_give_the_same_summary_for_every_scene() {
         );
         let bytes = log.finish(&end).unwrap().into_inner();
         let from_run = collector.finish(&scene, (&scene.settings, &overrides), &end);
-        let from_log = Summary::from_log(&ricochet::log::read_bytes_all(&bytes).unwrap(), Some(10));
+        let from_log = Summary::from_log(&bytes, Some(10)).unwrap();
         assert_eq!(from_run, from_log, "{name}");
         let text = from_run.to_json().unwrap();
         assert_eq!(text, from_log.to_json().unwrap(), "{name}");

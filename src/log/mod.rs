@@ -46,7 +46,7 @@ mod writer;
 pub use foxglove::{FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate};
 #[cfg(feature = "live")]
 pub use live::{LiveOptions, LiveView};
-pub use reader::{Ending, RunLog, SceneInfo, read, read_all, read_bytes, read_bytes_all};
+pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes, read_bytes_with, read_with};
 pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
     StateRecord,

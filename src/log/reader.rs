@@ -60,10 +60,6 @@ pub struct RunLog {
     pub impacts: Vec<ImpactRecord>,
     /// The last `/state` sample read.
     pub last_state: Option<StateRecord>,
-    /// Every `/state` sample, in file order, when read by [`read_all`] or
-    /// [`read_bytes_all`]; empty from [`read`] and [`read_bytes`], which decode the last
-    /// one only.
-    pub states: Vec<StateRecord>,
     /// Number of messages read per topic (every channel in the file, ricochet's or not).
     pub message_counts: BTreeMap<String, u64>,
     /// Smallest and largest message log time (s), if any message was read.
@@ -89,21 +85,27 @@ pub fn read(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
     read_bytes(&bytes)
 }
 
-/// Reads the log at `path` with every `/state` sample in [`RunLog::states`] (see
-/// [`read_bytes`]).
-pub fn read_all(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
+/// Reads the log at `path` as [`read_bytes_with`] does.
+pub fn read_with(
+    path: impl AsRef<Path>,
+    on_state: &mut dyn FnMut(StateRecord),
+) -> Result<RunLog, LogError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|source| LogError::Open {
         path: path.to_owned(),
         source,
     })?;
-    read_bytes_all(&bytes)
+    read_bytes_with(&bytes, on_state)
 }
 
-/// Reads a log held in memory, as [`read_bytes`] does, with every `/state` sample in
-/// [`RunLog::states`].
-pub fn read_bytes_all(bytes: &[u8]) -> Result<RunLog, LogError> {
-    read_log(bytes, true)
+/// Reads a log held in memory, as [`read_bytes`] does, and hands every `/state` sample
+/// to `on_state`, in file order, as it is read (a long log's samples are not all held
+/// at once).
+pub fn read_bytes_with(
+    bytes: &[u8],
+    on_state: &mut dyn FnMut(StateRecord),
+) -> Result<RunLog, LogError> {
+    read_log(bytes, Some(on_state))
 }
 
 /// Reads a log held in memory, as far as it goes.
@@ -117,11 +119,15 @@ pub fn read_bytes_all(bytes: &[u8]) -> Result<RunLog, LogError> {
 /// (the tests have it, through the `jsonschema` dev-dependency); without it about 7 % of
 /// arbitrary `f64`s come back one ulp off.
 pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
-    read_log(bytes, false)
+    read_log(bytes, None)
 }
 
-/// Reads a log, decoding every `/state` sample if `all_states`, else only the last.
-fn read_log(bytes: &[u8], all_states: bool) -> Result<RunLog, LogError> {
+/// Reads a log, decoding every `/state` sample for `on_state` if given, else only the
+/// last.
+fn read_log(
+    bytes: &[u8],
+    mut on_state: Option<&mut dyn FnMut(StateRecord)>,
+) -> Result<RunLog, LogError> {
     let mut log = RunLog {
         library: String::new(),
         format_version: 1,
@@ -130,7 +136,6 @@ fn read_log(bytes: &[u8], all_states: bool) -> Result<RunLog, LogError> {
         audit: None,
         impacts: vec![],
         last_state: None,
-        states: vec![],
         message_counts: BTreeMap::new(),
         time_range: None,
         ending: Ending::Complete,
@@ -173,10 +178,12 @@ fn read_log(bytes: &[u8], all_states: bool) -> Result<RunLog, LogError> {
                 });
                 match Topic::from_name(topic) {
                     Some(Topic::Impacts) => log.impacts.push(decode(Topic::Impacts.name(), &data)?),
-                    Some(Topic::State) if all_states => {
-                        log.states.push(decode(Topic::State.name(), &data)?);
+                    Some(Topic::State) => {
+                        if let Some(f) = on_state.as_mut() {
+                            f(decode(Topic::State.name(), &data)?);
+                        }
+                        last_state = Some(data.into_owned());
                     }
-                    Some(Topic::State) => last_state = Some(data.into_owned()),
                     _ => {}
                 }
             }
@@ -189,8 +196,6 @@ fn read_log(bytes: &[u8], all_states: bool) -> Result<RunLog, LogError> {
     }
     if let Some(data) = last_state {
         log.last_state = Some(decode(Topic::State.name(), &data)?);
-    } else {
-        log.last_state = log.states.last().cloned();
     }
     Ok(log)
 }

@@ -164,11 +164,10 @@ pub fn read_run(path: &Path) -> Result<Summary, RegressError> {
         source,
     })?;
     if bytes.starts_with(mcap::MAGIC) {
-        let log = crate::log::read_bytes_all(&bytes).map_err(|source| RegressError::Log {
+        return Summary::from_log(&bytes, None).map_err(|source| RegressError::Log {
             path: path.to_owned(),
             source,
-        })?;
-        return Ok(Summary::from_log(&log, None));
+        });
     }
     let text = String::from_utf8_lossy(&bytes);
     let value = parse_json(&text, path)?;

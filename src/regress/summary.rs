@@ -17,7 +17,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use crate::log::{Audit, Energy, ImpactRecord, RunLog, StateRecord};
+use crate::log::{Audit, Energy, ImpactRecord, LogError, StateRecord};
 use crate::math::Real;
 use crate::settings::Settings;
 
@@ -213,11 +213,18 @@ impl Summary {
         }
     }
 
-    /// The summary of the run in `log`, read with every sample ([`crate::log::read_all`]);
-    /// the checkpoints follow `count` (see [`Checkpoints::of`]), or every sample when
-    /// `count` is `None`. The coordinates' names come from the scene text in the log, when
-    /// it still loads.
-    pub fn from_log(log: &RunLog, count: Option<u64>) -> Summary {
+    /// The summary of the run in the log `bytes`; the checkpoints follow `count` (see
+    /// [`Checkpoints::of`], with the log's settings), or are every sample when `count` is
+    /// `None`. The coordinates' names come from the scene text in the log, when it still
+    /// loads.
+    pub fn from_log(bytes: &[u8], count: Option<u64>) -> Result<Summary, LogError> {
+        // Every sample as a snapshot (a few numbers each, not the whole `/state` record).
+        let mut samples: Vec<Snapshot> = Vec::new();
+        let mut scale = 0.0;
+        let log = crate::log::read_bytes_with(bytes, &mut |s| {
+            scale = sample_scale(scale, &s.energy);
+            samples.push(Snapshot::from(&s));
+        })?;
         let settings: Option<Settings> = (log.settings.as_ref())
             .and_then(|m| serde_json::from_value(Value::Object(m.clone())).ok());
         let rule = match (count, &settings) {
@@ -243,19 +250,9 @@ impl Summary {
             audit: log.audit.clone(),
             max_drift: settings.and_then(|s| s.max_drift),
         };
-        let scale = (log.states.iter()).fold(0.0, |m, s| sample_scale(m, &s.energy));
-        let checkpoints = (log.states.iter())
-            .filter(|s| rule.keeps(s.t))
-            .map(Snapshot::from)
-            .collect();
-        let last = log.states.last().or(log.last_state.as_ref());
-        Summary::assemble(
-            parts,
-            log.impacts.clone(),
-            checkpoints,
-            last.map(Snapshot::from),
-            scale,
-        )
+        let last = samples.last().cloned();
+        samples.retain(|s| rule.keeps(s.t));
+        Ok(Summary::assemble(parts, log.impacts, samples, last, scale))
     }
 
     /// The name of the first number that is not finite, if any. JSON has no NaN nor

@@ -27,9 +27,10 @@ pub struct Args {
 /// far as it goes, and the summary says so; only a file that is not a ricochet log fails.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.json {
-        let log = ricochet::log::read_all(&args.file)
+        let bytes = std::fs::read(&args.file)
+            .with_context(|| format!("cannot read {}", args.file.display()))?;
+        let summary = Summary::from_log(&bytes, Some(args.checkpoints))
             .with_context(|| format!("cannot inspect {}", args.file.display()))?;
-        let summary = Summary::from_log(&log, Some(args.checkpoints));
         let text = summary
             .to_json()
             .with_context(|| format!("cannot summarize {}", args.file.display()))?;
