@@ -192,6 +192,24 @@ fn another_e_names_the_first_impact_and_its_field() {
 }
 
 #[test]
+fn samples_pair_with_their_own_time_under_a_loose_time_tolerance() {
+    // B lacks A's sample at t = 0.5 s (as a run without an impact there lacks its two
+    // samples): under time_tol = 1 s A's other samples still meet their own times.
+    let (_, a) = run_scene(&scene("pendulum_wall"), &RunOverrides::default(), 20).unwrap();
+    let mut b = a.clone();
+    let k = b.checkpoints.iter().position(|s| s.t == 0.5).unwrap();
+    b.checkpoints.remove(k);
+    let loose = Tolerances {
+        time_tol: 1.0,
+        ..EXACT
+    };
+    let c = compare(&a, &b, &loose);
+    assert!(c.within, "{:?}", c.first.map(|f| f.to_text()));
+    let q = c.quantities.iter().find(|q| q.name == "samples.q").unwrap();
+    assert_eq!(q.compared as usize, b.checkpoints.len());
+}
+
+#[test]
 fn one_impact_less_is_a_difference_at_its_time() {
     let (_, a) = run_scene(&scene("pendulum_wall"), &RunOverrides::default(), 10).unwrap();
     let mut b = a.clone();

@@ -673,11 +673,20 @@ impl Comparer {
     }
 
     /// The samples at common times: both lists walked in time order.
+    /// A sample pairs with the other run's sample within `time_tol`, unless the next
+    /// sample of either run is a closer partner (a loose `time_tol` must not pair a sample
+    /// with its neighbour when the other run has it too).
     fn samples(&mut self, a: &[Snapshot], b: &[Snapshot]) {
         let (mut i, mut j) = (0, 0);
         while i < a.len() && j < b.len() {
             let (ta, tb) = (a[i].t, b[j].t);
-            if (ta - tb).abs() <= self.tol.time_tol {
+            let gap = (ta - tb).abs();
+            let closer = |x: Option<&Snapshot>, t: Real| x.is_some_and(|s| (s.t - t).abs() < gap);
+            if gap <= self.tol.time_tol && closer(a.get(i + 1), tb) {
+                i += 1;
+            } else if gap <= self.tol.time_tol && closer(b.get(j + 1), ta) {
+                j += 1;
+            } else if gap <= self.tol.time_tol {
                 self.snapshot("samples", &Place::Sample, &a[i], &b[j]);
                 i += 1;
                 j += 1;
