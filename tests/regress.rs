@@ -326,6 +326,25 @@ fn the_energy_scale_and_the_budget() {
     assert!(drift.broken(), "a budget of 1e-300 breaks");
 }
 
+#[test]
+fn a_rocking_ends_support_is_compared() {
+    let (_, a) = run_scene(&scene("rocking_block"), &RunOverrides::default(), 10).unwrap();
+    let k = (a.impacts.iter())
+        .position(|i| i.support.is_some())
+        .expect("a rocking end");
+    let mut b = a.clone();
+    b.impacts[k].support.as_mut().unwrap().i_n *= 1.0 + 1e-6;
+    let c = compare(&a, &b, &Tolerances::default());
+    assert_eq!(c.first.as_ref().unwrap().field, "support.i_n");
+    b.impacts[k].support = None;
+    let c = compare(&a, &b, &Tolerances::default());
+    let first = c.first.as_ref().unwrap();
+    assert_eq!(
+        (first.field.as_str(), first.t),
+        ("support", Some(a.impacts[k].t))
+    );
+}
+
 /// A fresh temporary folder, removed when dropped.
 struct TempDir(PathBuf);
 

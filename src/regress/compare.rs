@@ -12,9 +12,10 @@
 //! - **The impact frame.** Where the tangential approach speed vanishes the paper lets
 //!   either tangent be `t` (Eq. 10), and the choice follows the sign of rounding noise: a
 //!   rod landing flat, a rocking block. When B's tangent is opposite to A's, B's row is
-//!   mirrored into A's frame before the comparison (`m_nt`, `v_t`, `I_t`, `t`, α change
-//!   sign, `g ↔ p`, `h ↔ q`, forward ↔ reverse sliding, the sign case of the mirrored
-//!   coefficients): the same impact, written in the other frame. A note counts them.
+//!   mirrored into A's frame before the comparison (`m_nt`, `v_t`, `I_t` and its support's,
+//!   `t`, α change sign, `g ↔ p`, `h ↔ q`, forward ↔ reverse sliding, the sign case of the
+//!   mirrored coefficients): the same impact, written in the other frame. A note counts
+//!   them.
 //! - **Tolerances, per kind of quantity.** Times (impact times, sample and final times,
 //!   the stop time): `|a − b| ≤ time_tol`. Energies (the audit's terms and drift, the
 //!   ledger's energies, ΔE and its split, the samples' energies): `|a − b| ≤ atol + rtol ·
@@ -624,6 +625,20 @@ impl Comparer {
                 self.number((name, kind), at, field, x, y);
             }
         }
+        // The support of a rocking end: present on both sides or on neither.
+        match (&a.support, &b.support) {
+            (Some(x), Some(y)) => {
+                self.number(("impacts.support", V), at, "support.i_n", x.i_n, y.i_n);
+                self.number(("impacts.support", V), at, "support.i_t", x.i_t, y.i_t);
+                let duration = ("impacts.support_duration", Time);
+                self.number(duration, at, "support.duration", x.duration, y.duration);
+            }
+            (None, None) => {}
+            (x, y) => {
+                let present = |s: &Option<_>| json!(if s.is_some() { "present" } else { "absent" });
+                self.exact("impacts.type", at, "support", present(x), present(y));
+            }
+        }
     }
 
     /// Two vectors of generalized coordinates or speeds, entry by entry.
@@ -803,8 +818,8 @@ impl Comparer {
 }
 
 /// The ledger row `r` written with the opposite tangent `−t`: the same impact in the other
-/// frame that Eq. (10) allows when `v_t^A = 0`. `m_nt`, `v_t`, `I_t`, `t` and α change
-/// sign; `g = μ m_tt − m_nt` and `p = μ m_tt + m_nt` swap, as do `h` and `q`; forward and
+/// frame that Eq. (10) allows when `v_t^A = 0`. `m_nt`, `v_t`, `I_t` (and its support's),
+/// `t` and α change sign; `g = μ m_tt − m_nt` and `p = μ m_tt + m_nt` swap, as do `h` and `q`; forward and
 /// reverse sliding swap (they are the sign of `v_t^S` along `t`); the sign case is that of
 /// the swapped coefficients [P, Table 1].
 fn mirrored(r: &ImpactRecord) -> ImpactRecord {
@@ -834,6 +849,9 @@ fn mirrored(r: &ImpactRecord) -> ImpactRecord {
             t: -r.v_s.t,
         },
         i_t: -r.i_t,
+        support: r
+            .support
+            .map(|s| crate::log::SupportRecord { i_t: -s.i_t, ..s }),
         tangent: crate::log::Planar {
             x: -r.tangent.x,
             y: -r.tangent.y,

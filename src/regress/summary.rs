@@ -284,6 +284,12 @@ impl Summary {
             if let Some(f) = i.first_non_finite() {
                 return Some(format!("impacts[{k}].{f}"));
             }
+            if let Some(s) = &i.support {
+                let values = [("i_n", s.i_n), ("i_t", s.i_t), ("duration", s.duration)];
+                if let Some((name, _)) = values.iter().find(|(_, v)| !v.is_finite()) {
+                    return Some(format!("impacts[{k}].support.{name}"));
+                }
+            }
         }
         let snapshots = (self
             .final_state
