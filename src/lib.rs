@@ -70,6 +70,7 @@ pub mod math;
 pub mod model;
 pub mod pgs;
 pub mod regions;
+pub mod regress;
 pub mod scene;
 pub mod settings;
 pub mod sim;

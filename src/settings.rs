@@ -15,6 +15,12 @@ pub struct Settings {
     pub output_rate: Real,
     /// How the equations of motion are integrated.
     pub integrator: IntegratorSettings,
+    /// The energy-drift budget: the largest integration drift of the energy audit that a
+    /// run may show, relative to the run's energy scale (dimensionless; see
+    /// `regress::DriftCheck`). `None`: no budget. A run that breaks it still runs to its
+    /// end and writes its log, and `ricochet run` exits with 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_drift: Option<Real>,
 }
 
 /// Integrator settings.
@@ -50,6 +56,7 @@ impl Default for Settings {
             t_end: 1.0,
             output_rate: 100.0,
             integrator: IntegratorSettings::default(),
+            max_drift: None,
         }
     }
 }

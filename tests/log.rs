@@ -719,6 +719,13 @@ fn reader_returns_metadata_impacts_and_counts() {
         );
     }
     assert_eq!(log.time_range, Some((0.0, 0.99)));
+
+    // `read_bytes_with` gives the same, and every `/state` sample in order.
+    let mut states = Vec::new();
+    let bytes = write_run(&run, LogOptions::default());
+    let with = ricochet::log::read_bytes_with(&bytes, &mut |s| states.push(s)).unwrap();
+    assert_eq!(with, log);
+    assert_eq!(states, (0..N_STATES).map(state).collect::<Vec<_>>());
 }
 
 #[test]

@@ -303,6 +303,20 @@ fn the_base_snippet_is_valid() {
 }
 
 #[test]
+fn a_drift_budget_is_read_from_the_run_table() {
+    assert_eq!(
+        scene::load_str(BASE, "base.toml")
+            .unwrap()
+            .settings
+            .max_drift,
+        None
+    );
+    let text = variant(&[("t_end = 1.0", "t_end = 1.0\nmax_drift = 1e-9")], "");
+    let s = scene::load_str(&text, "base.toml").unwrap();
+    assert_eq!(s.settings.max_drift, Some(1e-9));
+}
+
+#[test]
 fn bad_scenes_are_rejected_with_the_field_and_its_line() {
     const J: &str = "joint = ";
     let cases = vec![
@@ -527,6 +541,41 @@ fn bad_scenes_are_rejected_with_the_field_and_its_line() {
             "t_end",
             "run.t_end",
             "the end time must be within [1e-9, 1e9] s, got 0 s",
+        ),
+        bad(
+            "zero drift budget",
+            &[("t_end = 1.0", "t_end = 1.0\nmax_drift = 0.0")],
+            "max_drift",
+            "run.max_drift",
+            "the drift budget max_drift must be within [1e-16, 1000], got 0",
+        ),
+        bad(
+            "negative drift budget",
+            &[("t_end = 1.0", "t_end = 1.0\nmax_drift = -1e-9")],
+            "max_drift",
+            "run.max_drift",
+            "max_drift must be within [1e-16, 1000], got -1e-9",
+        ),
+        bad(
+            "infinite drift budget",
+            &[("t_end = 1.0", "t_end = 1.0\nmax_drift = inf")],
+            "max_drift",
+            "run.max_drift",
+            "max_drift must be a finite number within [1e-16, 1000], got inf",
+        ),
+        bad(
+            "NaN drift budget",
+            &[("t_end = 1.0", "t_end = 1.0\nmax_drift = nan")],
+            "max_drift",
+            "run.max_drift",
+            "max_drift must be a finite number within [1e-16, 1000], got NaN",
+        ),
+        bad(
+            "drift budget as a string",
+            &[("t_end = 1.0", "t_end = 1.0\nmax_drift = \"1e-9\"")],
+            "max_drift",
+            "run.max_drift",
+            "invalid type",
         ),
         bad_extra(
             "unknown method",

@@ -272,6 +272,7 @@ fn simulate(d: &Drop) -> Option<Real> {
     let settings = Settings {
         t_end: d.t_max,
         output_rate: 0.0,
+        max_drift: None,
         integrator: IntegratorSettings::default(),
     };
     let mut sim = Simulation::new(&model, &settings, MaterialOverride::default()).unwrap();

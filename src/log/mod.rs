@@ -46,13 +46,13 @@ mod writer;
 pub use foxglove::{FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate};
 #[cfg(feature = "live")]
 pub use live::{LiveOptions, LiveView};
-pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
+pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes, read_bytes_with, read_with};
 pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
     StateRecord, SupportRecord,
 };
 pub use repair::{InputEnd, RepairReport, repair, repair_bytes};
-pub use run::{RunLogger, Tap};
+pub use run::{LedgerNames, RunLogger, RunSettings, Tap};
 pub use schemas::{FORMAT_VERSION, Topic};
 pub use writer::{Compression, LogOptions, LogWriter};
 

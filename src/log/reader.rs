@@ -85,6 +85,29 @@ pub fn read(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
     read_bytes(&bytes)
 }
 
+/// Reads the log at `path` as [`read_bytes_with`] does.
+pub fn read_with(
+    path: impl AsRef<Path>,
+    on_state: &mut dyn FnMut(StateRecord),
+) -> Result<RunLog, LogError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| LogError::Open {
+        path: path.to_owned(),
+        source,
+    })?;
+    read_bytes_with(&bytes, on_state)
+}
+
+/// Reads a log held in memory, as [`read_bytes`] does, and hands every `/state` sample
+/// to `on_state`, in file order, as it is read (a long log's samples are not all held
+/// at once).
+pub fn read_bytes_with(
+    bytes: &[u8],
+    on_state: &mut dyn FnMut(StateRecord),
+) -> Result<RunLog, LogError> {
+    read_log(bytes, Some(on_state))
+}
+
 /// Reads a log held in memory, as far as it goes.
 ///
 /// Errors only when the bytes are not an MCAP file at all, or when a record of ricochet's
@@ -96,6 +119,15 @@ pub fn read(path: impl AsRef<Path>) -> Result<RunLog, LogError> {
 /// (the tests have it, through the `jsonschema` dev-dependency); without it about 7 % of
 /// arbitrary `f64`s come back one ulp off.
 pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
+    read_log(bytes, None)
+}
+
+/// Reads a log, decoding every `/state` sample for `on_state` if given, else only the
+/// last.
+fn read_log(
+    bytes: &[u8],
+    mut on_state: Option<&mut dyn FnMut(StateRecord)>,
+) -> Result<RunLog, LogError> {
     let mut log = RunLog {
         library: String::new(),
         format_version: 1,
@@ -146,7 +178,12 @@ pub fn read_bytes(bytes: &[u8]) -> Result<RunLog, LogError> {
                 });
                 match Topic::from_name(topic) {
                     Some(Topic::Impacts) => log.impacts.push(decode(Topic::Impacts.name(), &data)?),
-                    Some(Topic::State) => last_state = Some(data.into_owned()),
+                    Some(Topic::State) => {
+                        if let Some(f) = on_state.as_mut() {
+                            f(decode(Topic::State.name(), &data)?);
+                        }
+                        last_state = Some(data.into_owned());
+                    }
                     _ => {}
                 }
             }

@@ -58,10 +58,8 @@ pub trait Tap: Send {
 /// at the end, the energy audit as metadata.
 pub struct RunLogger<W: Write + Seek + Send + 'static> {
     writer: LogWriter<W>,
-    /// Pair names `<collider a>/<collider b>`, in pair order.
-    pairs: Vec<String>,
-    /// Body names of each pair's two sides (`world` for an obstacle).
-    sides: Vec<(String, String)>,
+    /// The names that ledger entries carry.
+    names: LedgerNames,
     /// A contact is drawn as closed when its gap is at most this (m).
     gap_tol: Real,
     impacts: u64,
@@ -94,40 +92,14 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
         initial: &State,
         gap_tol: Real,
     ) -> Result<Self, LogError> {
-        #[derive(Serialize)]
-        struct AsRun<'a> {
-            #[serde(flatten)]
-            settings: &'a Settings,
-            material_overrides: &'a MaterialOverride,
-        }
         let t0 = initial.t;
         writer.scene(name, text)?;
-        writer.settings(&AsRun {
+        writer.settings(&RunSettings {
             settings,
             material_overrides: overrides,
         })?;
         let bodies: Vec<String> = model.bodies().iter().map(|b| b.name.clone()).collect();
-        let side = |c: crate::model::ColliderId| -> String {
-            model.colliders()[c.index()]
-                .body
-                .map_or_else(|| "world".to_owned(), |b| bodies[b.index()].clone())
-        };
-        let pairs: Vec<String> = model
-            .pairs()
-            .iter()
-            .map(|p| {
-                let (a, b) = (
-                    &model.colliders()[p.a.index()],
-                    &model.colliders()[p.b.index()],
-                );
-                format!("{}/{}", a.name, b.name)
-            })
-            .collect();
-        let sides = model
-            .pairs()
-            .iter()
-            .map(|p| (side(p.a), side(p.b)))
-            .collect();
+        let names = LedgerNames::new(model);
         let drawing = geometry(model, t0)?;
         writer.geometry(t0, &drawing)?;
 
@@ -141,7 +113,7 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
         let extent = start.maxs - start.mins;
         let view = ViewTracker::new(&start);
 
-        let contacts = (pairs.iter())
+        let contacts = (names.pairs.iter())
             .map(|name| ContactState::new(name.clone(), ContactMode::Free, 0.0))
             .collect();
         let state = StateRecord::new(t0, vec![], vec![], Energy::new(0.0, 0.0), contacts, 0);
@@ -150,8 +122,7 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
         tf.transforms.push(view.transform(t0)?);
         Ok(Self {
             writer,
-            pairs,
-            sides,
+            names,
             gap_tol,
             impacts: 0,
             arrow: ArrowStyle::for_size(extent.x.max(extent.y)),
@@ -175,13 +146,45 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
 
     /// Ends the log: writes the energy audit of `summary` and finishes the file.
     pub fn finish(mut self, summary: &RunSummary) -> Result<W, LogError> {
+        self.writer.audit(&Audit::of_run(summary))?;
+        let inner = self.writer.finish()?;
+        if let Some(tap) = &mut self.tap {
+            tap.finish();
+        }
+        Ok(inner)
+    }
+
+    /// Flushes what is written so far (the log stays readable if the process dies).
+    pub fn flush(&mut self) -> Result<(), LogError> {
+        self.writer.flush()
+    }
+}
+
+/// The `settings` metadata record of a run: the run settings, with the material overrides
+/// of the command line, so that the log describes the run it holds. Each top-level field
+/// is a key of the record.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct RunSettings<'a> {
+    /// The scene's settings, after the command line's overrides.
+    #[serde(flatten)]
+    pub settings: &'a Settings,
+    /// The law, `e` and `μ` that replace every pair's (`null` where not overridden).
+    pub material_overrides: &'a MaterialOverride,
+}
+
+impl Audit {
+    /// The audit record of a run that ended with `summary`: the stop reason as
+    /// `<name>: <what>` (`error: <the error>` for a failure), the balance with the dampers'
+    /// and efforts' works as `applied_work` and the prescribed motions' (at the impacts
+    /// and between them) as `prescribed_work`.
+    pub fn of_run(summary: &RunSummary) -> Audit {
         let a = &summary.audit;
         let c = &summary.counters;
         let stop = match &summary.stop {
             StopReason::Failed(e) => format!("error: {e}"),
             other => format!("{}: {other}", other.name()),
         };
-        let audit = Audit::new(
+        Audit::new(
             stop,
             summary.state.t,
             (a.initial.total(), a.end.total()),
@@ -199,18 +202,93 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
                 events: c.events,
                 state_samples: c.samples,
             },
-        );
-        self.writer.audit(&audit)?;
-        let inner = self.writer.finish()?;
-        if let Some(tap) = &mut self.tap {
-            tap.finish();
-        }
-        Ok(inner)
+        )
+    }
+}
+
+/// The names that a model's ledger entries carry: each contact pair's name and the bodies
+/// of its two sides.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LedgerNames {
+    /// Pair names `<collider a>/<collider b>`, in pair order.
+    pub pairs: Vec<String>,
+    /// Body names of each pair's two sides (`world` for an obstacle), in pair order.
+    pub sides: Vec<(String, String)>,
+}
+
+impl LedgerNames {
+    /// The names of `model`'s pairs.
+    pub fn new(model: &Model) -> LedgerNames {
+        let side = |c: crate::model::ColliderId| -> String {
+            model.colliders()[c.index()].body.map_or_else(
+                || "world".to_owned(),
+                |b| model.bodies()[b.index()].name.clone(),
+            )
+        };
+        let pairs = (model.pairs().iter())
+            .map(|p| {
+                let (a, b) = (
+                    &model.colliders()[p.a.index()],
+                    &model.colliders()[p.b.index()],
+                );
+                format!("{}/{}", a.name, b.name)
+            })
+            .collect();
+        let sides = (model.pairs().iter())
+            .map(|p| (side(p.a), side(p.b)))
+            .collect();
+        LedgerNames { pairs, sides }
     }
 
-    /// Flushes what is written so far (the log stays readable if the process dies).
-    pub fn flush(&mut self) -> Result<(), LogError> {
-        self.writer.flush()
+    /// The ledger entry (`/impacts` record) of the impact `ev`: the law's outcome, the
+    /// frame, the energies; `alpha` absent when it is not finite (no approach speed).
+    pub fn entry(&self, ev: &ImpactEvent) -> ImpactRecord {
+        let k = ev.frame.pair.index();
+        let (out, c) = (&ev.outcome, &ev.outcome.coefficients);
+        ImpactRecord {
+            t: ev.t,
+            pair: self.pairs[k].clone(),
+            body_a: self.sides[k].0.clone(),
+            body_b: self.sides[k].1.clone(),
+            law: out.law,
+            impact_type: out.kind,
+            case: out.case.number(),
+            alpha: Some(c.alpha()).filter(|a| a.is_finite()),
+            w: ev.w,
+            g: c.g,
+            h: c.h,
+            p: c.p,
+            q: c.q,
+            v_a: ev.v_a,
+            v_s: out.v_s,
+            i_n: ev.impulse().n,
+            i_t: ev.impulse().t,
+            support: ev.support.map(|s| SupportRecord {
+                i_n: s.impulse.n,
+                i_t: s.impulse.t,
+                duration: s.duration,
+            }),
+            delta_u: ev.delta_u.clone(),
+            energy_before: ev.energy_before.total(),
+            energy_after: ev.energy_after.total(),
+            delta_e: out.delta_e,
+            work_n: out.work_n,
+            work_t: out.work_t,
+            index: ev.index,
+            cause: match ev.cause {
+                crate::sim::ImpactCause::Collision => ImpactCause::Collision,
+                crate::sim::ImpactCause::Simultaneous => ImpactCause::Simultaneous,
+                crate::sim::ImpactCause::WithoutCollision => ImpactCause::WithoutCollision,
+                crate::sim::ImpactCause::AccumulationEnd => ImpactCause::AccumulationEnd,
+                crate::sim::ImpactCause::RockingEnd => ImpactCause::RockingEnd,
+            },
+            e: ev.material.e,
+            mu: ev.material.mu,
+            prescribed_work: ev.prescribed_work(),
+            point: planar(ev.frame.point()),
+            normal: planar(ev.frame.n),
+            tangent: planar(ev.frame.t),
+        }
     }
 }
 
@@ -353,52 +431,7 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
     }
 
     fn impact(&mut self, _model: &Model, ev: &ImpactEvent) -> Result<(), ObserverError> {
-        let k = ev.frame.pair.index();
-        let (out, c) = (&ev.outcome, &ev.outcome.coefficients);
-        let record = ImpactRecord {
-            t: ev.t,
-            pair: self.pairs[k].clone(),
-            body_a: self.sides[k].0.clone(),
-            body_b: self.sides[k].1.clone(),
-            law: out.law,
-            impact_type: out.kind,
-            case: out.case.number(),
-            alpha: Some(c.alpha()).filter(|a| a.is_finite()),
-            w: ev.w,
-            g: c.g,
-            h: c.h,
-            p: c.p,
-            q: c.q,
-            v_a: ev.v_a,
-            v_s: out.v_s,
-            i_n: ev.impulse().n,
-            i_t: ev.impulse().t,
-            support: ev.support.map(|s| SupportRecord {
-                i_n: s.impulse.n,
-                i_t: s.impulse.t,
-                duration: s.duration,
-            }),
-            delta_u: ev.delta_u.clone(),
-            energy_before: ev.energy_before.total(),
-            energy_after: ev.energy_after.total(),
-            delta_e: out.delta_e,
-            work_n: out.work_n,
-            work_t: out.work_t,
-            index: ev.index,
-            cause: match ev.cause {
-                crate::sim::ImpactCause::Collision => ImpactCause::Collision,
-                crate::sim::ImpactCause::Simultaneous => ImpactCause::Simultaneous,
-                crate::sim::ImpactCause::WithoutCollision => ImpactCause::WithoutCollision,
-                crate::sim::ImpactCause::AccumulationEnd => ImpactCause::AccumulationEnd,
-                crate::sim::ImpactCause::RockingEnd => ImpactCause::RockingEnd,
-            },
-            e: ev.material.e,
-            mu: ev.material.mu,
-            prescribed_work: ev.prescribed_work(),
-            point: planar(ev.frame.point()),
-            normal: planar(ev.frame.n),
-            tangent: planar(ev.frame.t),
-        };
+        let record = self.names.entry(ev);
         let impulse = record.impulse();
         let length = (self.arrow_scale).length(impulse.x.hypot(impulse.y), &self.arrow);
         self.writer.impact_drawn(&record, (length, self.arrow))?;

@@ -195,6 +195,13 @@ fn settings(run: &RunSpec, loc: &Locator<'_>) -> Result<Settings, SceneError> {
             ));
         }
     }
+    if let Some(budget) = &run.max_drift {
+        settings.max_drift = Some(within(
+            budget,
+            "the drift budget max_drift",
+            ranges::MAX_DRIFT,
+        )?);
+    }
     let mut integ = IntegratorSettings::default();
     if let Some(spec) = &run.integrator {
         if let Some(m) = spec.method {

@@ -78,6 +78,8 @@ pub(super) struct RunSpec {
     #[serde(default)]
     pub output_rate: Option<Spanned<Real>>,
     #[serde(default)]
+    pub max_drift: Option<Spanned<Real>>,
+    #[serde(default)]
     pub integrator: Option<IntegratorSpec>,
 }
 

@@ -43,6 +43,8 @@ pub(super) const DT: (Real, Real) = (1e-12, 1.0);
 pub(super) const FIXED_STEPS: Real = 1e10;
 /// The largest adaptive step (s).
 pub(super) const H_MAX: (Real, Real) = (1e-12, 1e9);
+/// The energy-drift budget `max_drift`, relative to the run's energy scale.
+pub(super) const MAX_DRIFT: (Real, Real) = (1e-16, 1e3);
 /// The longest name (characters).
 pub(super) const NAME_LENGTH: usize = 64;
 

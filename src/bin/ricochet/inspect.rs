@@ -1,4 +1,5 @@
-//! `ricochet inspect`: the summary of a run from its MCAP log alone.
+//! `ricochet inspect`: the summary of a run from its MCAP log alone, as a table or as the
+//! JSON run summary (`--json`).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -6,18 +7,40 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use ricochet::log::{Audit, Ending, ImpactRecord, RunLog, Topic};
+use ricochet::regress::Summary;
 
 /// Options of `ricochet inspect`.
 #[derive(clap::Args)]
 pub struct Args {
     /// The MCAP log of a run.
     file: PathBuf,
+    /// Print the run summary as JSON instead (the document of `ricochet run --summary`).
+    #[arg(long)]
+    json: bool,
+    /// With `--json`: about how many checkpoints (states on the output grid) to keep.
+    #[arg(long, default_value_t = ricochet::regress::DEFAULT_CHECKPOINTS, value_name = "N")]
+    checkpoints: u64,
 }
 
 /// Prints the scene, the settings, the impact ledger and the energy audit of a log. A log
 /// cut short (a killed process) or without an audit (a run that stopped early) is read as
 /// far as it goes, and the summary says so; only a file that is not a ricochet log fails.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if args.json {
+        let bytes = std::fs::read(&args.file)
+            .with_context(|| format!("cannot read {}", args.file.display()))?;
+        let summary = Summary::from_log(&bytes, Some(args.checkpoints))
+            .with_context(|| format!("cannot inspect {}", args.file.display()))?;
+        let text = summary
+            .to_json()
+            .with_context(|| format!("cannot summarize {}", args.file.display()))?;
+        use std::io::Write as _;
+        return match std::io::stdout().lock().write_all(text.as_bytes()) {
+            // A closed pipe (`ricochet inspect … --json | head`) is not an error of the log.
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+            _ => Ok(ExitCode::SUCCESS),
+        };
+    }
     let log = ricochet::log::read(&args.file)
         .with_context(|| format!("cannot inspect {}", args.file.display()))?;
     print!("{}", report(&log, &args.file.display().to_string()));

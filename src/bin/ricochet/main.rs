@@ -6,6 +6,8 @@ use clap::{Parser, Subcommand};
 
 mod bench;
 mod check;
+mod compare;
+mod golden;
 mod impact;
 mod inspect;
 mod live;
@@ -31,12 +33,22 @@ enum Command {
     /// Simulate a scene, write its MCAP log, print the impacts and the energy audit.
     ///
     /// Exit status: 0 when the run reached its end time, 1 when it failed (a stall of
-    /// impacts or contact modes at one instant is a failure), 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
+    /// impacts or contact modes at one instant is a failure, and so is a run that breaks
+    /// its energy-drift budget, after writing its log), 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM,
     /// 129 by SIGHUP. The first signal stops the run at its next step and finishes its log;
     /// a second one exits at once.
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
     Inspect(inspect::Args),
+    /// Compare two runs (logs, summaries or golden files): impacts, energies, states.
+    ///
+    /// Exit status: 0 within the tolerances, 1 beyond them, 2 on an error.
+    Compare(compare::Args),
+    /// Golden runs of scenes: record them, check them again (one line per scene).
+    ///
+    /// Exit status: 0 when every scene holds, 1 when one moved or broke its drift budget,
+    /// 2 on an error.
+    Golden(golden::Args),
     /// Copy an MCAP log cut short (its writer killed) into a finished one that every reader opens.
     Repair(repair::Args),
     /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
@@ -55,6 +67,8 @@ fn main() -> ExitCode {
         Command::Check(args) => check::run(args),
         Command::Run(args) => run::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Compare(args) => compare::run(args),
+        Command::Golden(args) => golden::run(args),
         Command::Repair(args) => repair::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Regions(args) => regions::run(args),

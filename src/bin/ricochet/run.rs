@@ -7,13 +7,14 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use ricochet::impact::Law;
 use ricochet::integrate::Method;
 use ricochet::log::{LogOptions, LogWriter, RunLogger};
 use ricochet::math::Real;
 use ricochet::model::Model;
+use ricochet::regress::{Collector, DriftCheck, RunOverrides};
 use ricochet::sim::{
     ImpactEvent, Level, MaterialOverride, MoreauJean, Observer, ObserverError, RunSummary, Sample,
     Simulation, StopReason,
@@ -52,6 +53,17 @@ pub struct Args {
     /// Step of RK4 and of Moreau–Jean (s).
     #[arg(long, allow_negative_numbers = true)]
     dt: Option<Real>,
+    /// Energy-drift budget, relative to the run's energy scale (instead of the scene's
+    /// `[run] max_drift`): a run whose audit drifts more exits with 1, after writing its log.
+    #[arg(long, allow_negative_numbers = true)]
+    max_drift: Option<Real>,
+    /// Also write the run summary (JSON: settings, audit, drift, every ledger row, the final
+    /// state and checkpoints) to this file.
+    #[arg(long, value_name = "FILE.json")]
+    summary: Option<PathBuf>,
+    /// About how many checkpoints (states on the output grid) the summary keeps.
+    #[arg(long, default_value_t = ricochet::regress::DEFAULT_CHECKPOINTS, value_name = "N")]
+    checkpoints: u64,
     /// Print only the summary line, not the impact table and the audit.
     #[arg(short, long)]
     quiet: bool,
@@ -79,6 +91,8 @@ struct Terminal<W: Write + Seek + Send + 'static> {
     progress: Option<ProgressBar>,
     t_end: Real,
     rows: Vec<Row>,
+    /// The run summary and the drift check.
+    collector: Collector,
 }
 
 impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
@@ -86,6 +100,7 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
         if let Some(bar) = &self.progress {
             bar.set_position((1000.0 * s.t / self.t_end) as u64);
         }
+        self.collector.sample(model, s)?;
         self.log.sample(model, s)
     }
 
@@ -104,6 +119,7 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
             v_s: (ev.outcome.v_s.n, ev.outcome.v_s.t),
             delta_e: ev.outcome.delta_e,
         });
+        self.collector.impact(model, ev)?;
         self.log.impact(model, ev)
     }
 
@@ -123,43 +139,18 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut scene = ricochet::scene::load(&args.scene)?;
     // Overrides of the scene's settings.
-    let s = &mut scene.settings;
-    if let Some(t) = args.t_end {
-        if !(t.is_finite() && t > 0.0) {
-            bail!("--t-end must be a positive number of seconds, not {t}");
-        }
-        s.t_end = t;
-    }
-    if let Some(m) = args.method {
-        s.integrator.method = m;
-    }
-    for (name, value, field) in [
-        ("--rtol", args.rtol, &mut s.integrator.rtol),
-        ("--atol", args.atol, &mut s.integrator.atol),
-        ("--dt", args.dt, &mut s.integrator.dt),
-    ] {
-        if let Some(v) = value {
-            if !(v.is_finite() && v > 0.0) {
-                bail!("{name} must be a positive number, not {v}");
-            }
-            *field = v;
-        }
-    }
-    if let Some(e) = args.e
-        && !(0.0..=1.0).contains(&e)
-    {
-        bail!("--e must lie in [0, 1], not {e}");
-    }
-    if let Some(mu) = args.mu
-        && !(mu >= 0.0 && mu.is_finite())
-    {
-        bail!("--mu must be a non-negative number, not {mu}");
-    }
-    let overrides = MaterialOverride {
+    let cli = RunOverrides {
+        t_end: args.t_end,
         law: args.law,
         e: args.e,
         mu: args.mu,
+        method: args.method,
+        rtol: args.rtol,
+        atol: args.atol,
+        dt: args.dt,
+        max_drift: args.max_drift,
     };
+    let overrides = apply_overrides(&cli, &mut scene.settings)?;
     let output = args
         .output
         .unwrap_or_else(|| PathBuf::from(format!("{}.mcap", scene.name)));
@@ -177,7 +168,19 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Runner::MoreauJean(mj) => mj.scales().gap_tol,
     };
     let live = crate::live::start(&args.live)?;
-    let writer = LogWriter::create(&output, LogOptions::default())?;
+    // The summary's file is created before the run, so that a path that cannot be written
+    // fails at once, not after the run.
+    let summary_file = (args.summary.as_ref())
+        .map(|path| {
+            std::fs::File::create(path)
+                .with_context(|| format!("cannot create the summary {}", path.display()))
+        })
+        .transpose()?;
+    let writer = LogWriter::create(&output, LogOptions::default()).inspect_err(|_| {
+        if let Some(path) = &args.summary {
+            let _ = std::fs::remove_file(path);
+        }
+    })?;
     let log = RunLogger::new(
         writer,
         &scene.model,
@@ -205,6 +208,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         progress,
         t_end: scene.settings.t_end,
         rows: Vec::new(),
+        collector: Collector::new(&scene.model, &scene.settings, args.checkpoints),
     };
 
     let interrupt = Arc::new(AtomicBool::new(false));
@@ -223,17 +227,45 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .finish(&summary)
         .with_context(|| format!("cannot finish the log {}", output.display()))?;
 
-    let printed = report(&scene.name, &output, &summary, &rows, args.quiet);
+    let document = (terminal.collector).finish(&scene, (&scene.settings, &overrides), &summary);
+    if let (Some(mut file), Some(path)) = (summary_file, &args.summary) {
+        let text = (document.to_json())
+            .with_context(|| format!("cannot write the summary {}", path.display()))?;
+        (file.write_all(text.as_bytes()))
+            .with_context(|| format!("cannot write the summary {}", path.display()))?;
+    }
+    let drift = document.drift;
+    let printed = report(&scene.name, &output, (&summary, drift), &rows, args.quiet);
     let signal = signal.load(Ordering::SeqCst);
     match printed {
         // After SIGHUP the terminal is gone: the log is finished, the report is not needed.
         Err(_) if signal == SIGHUP => {}
         printed => printed?,
     }
+    let broken = drift.filter(|d| d.broken());
+    if let Some(d) = broken {
+        eprintln!("error: the energy-drift budget is broken: {}", d.describe());
+    }
     Ok(match summary.stop {
+        StopReason::EndTime if broken.is_some() => ExitCode::FAILURE,
         StopReason::EndTime => ExitCode::SUCCESS,
         StopReason::Interrupted { .. } => ExitCode::from(interrupted_status(signal)),
         StopReason::Failed(_) => ExitCode::FAILURE,
+    })
+}
+
+/// Applies the command line's overrides to `settings`; an error names the option.
+pub fn apply_overrides(
+    cli: &RunOverrides,
+    settings: &mut ricochet::settings::Settings,
+) -> anyhow::Result<MaterialOverride> {
+    cli.apply(settings).map_err(|e| {
+        anyhow::anyhow!(
+            "--{} {}, not {}",
+            e.field.replace('_', "-"),
+            e.requirement(),
+            e.value
+        )
     })
 }
 
@@ -292,7 +324,7 @@ const TABLE_ROWS: usize = 40;
 fn report(
     name: &str,
     output: &std::path::Path,
-    summary: &RunSummary,
+    (summary, drift): (&RunSummary, Option<DriftCheck>),
     rows: &[Row],
     quiet: bool,
 ) -> anyhow::Result<()> {
@@ -354,12 +386,6 @@ fn report(
             }
         }
         let a = &summary.audit;
-        let scale = a
-            .initial
-            .total()
-            .abs()
-            .max(a.end.total().abs())
-            .max(Real::MIN_POSITIVE);
         writeln!(out)?;
         writeln!(out, "energy audit [J]")?;
         writeln!(
@@ -407,12 +433,16 @@ fn report(
             "  persistent contact forces    {:>16.9e}",
             a.contact_work
         )?;
+        let relative = (drift.and_then(|d| d.relative))
+            .map_or_else(|| "unmeasurable".to_owned(), |r| format!("{r:.1e}"));
         writeln!(
             out,
-            "  integration drift            {:>16.9e}   ({:.1e} relative)",
+            "  integration drift            {:>16.9e}   ({relative} relative)",
             a.drift(),
-            a.drift().abs() / scale
         )?;
+    }
+    if let Some(d) = drift.filter(|d| d.max_drift.is_some()) {
+        writeln!(out, "drift budget: {}", d.describe())?;
     }
     writeln!(out, "log: {}", output.display())?;
     Ok(())
