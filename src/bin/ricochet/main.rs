@@ -36,6 +36,9 @@ enum Command {
     /// a second one exits at once.
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
+    ///
+    /// Exit status: 0 for a complete log or one cut short (read as far as it goes), 1 for a
+    /// damaged log (what was read is printed, then the error) or a file that is not a log.
     Inspect(inspect::Args),
     /// Copy an MCAP log cut short (its writer killed) into a finished one that every reader opens.
     Repair(repair::Args),
