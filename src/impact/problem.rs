@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::scale::Scale;
 use crate::math::Real;
 
 /// The 2×2 matrix `W = [[m_nn, m_nt], [m_nt, m_tt]]` of [P, Eq. (20)], mapping the
@@ -171,6 +172,19 @@ pub enum ImpactError {
         /// The law's name.
         law: &'static str,
     },
+    /// A number of the answer is beyond the range of doubles: the impulses scale as
+    /// `|v^A| / |W|`, the energies as `|v^A|² / |W|` (see [`crate::impact`]'s scale
+    /// invariance), and the data's scales are too far apart.
+    #[error(
+        "the answer is beyond the range of doubles: {what} = {value} (impulses scale as \
+         |v^A|/|W|, energies as |v^A|²/|W|)"
+    )]
+    OutOfRange {
+        /// The quantity, e.g. `I_n`.
+        what: &'static str,
+        /// Its value (infinite).
+        value: Real,
+    },
     /// The law's solution fails a coherence condition of [P, Sect. 4.2] beyond rounding:
     /// a bug, never an expected outcome.
     #[error("incoherent {law} solution: {detail}")]
@@ -194,7 +208,8 @@ impl ImpactProblem {
 
     /// Checks the data: finite numbers, `W` positive semidefinite with `m_nn > 0` (the
     /// normal direction must be mobile; see [`ImpactMatrix::is_singular`]), `v_n^A < 0`,
-    /// `e ∈ [0, 1]`, `μ ≥ 0`.
+    /// `e ∈ [0, 1]`, `μ ≥ 0`. The sign of `Δ` is tested on `W` divided by the power of
+    /// two of its largest entry, so that `m_nn m_tt` neither overflows nor underflows.
     pub fn validate(&self) -> Result<(), ImpactError> {
         let all_finite = self.w.nn.is_finite()
             & self.w.nt.is_finite()
@@ -206,16 +221,16 @@ impl ImpactProblem {
         if !all_finite {
             return Err(self.first_non_finite());
         }
-        let det = self.w.det();
-        if !(self.w.nn > 0.0
-            && self.w.tt >= 0.0
-            && det >= -SINGULAR_RELATIVE_DET * self.w.nn * self.w.tt)
+        let unit = Scale::of(&self.w, self.v_a).matrix_down(&self.w);
+        if !(unit.nn > 0.0
+            && unit.tt >= 0.0
+            && unit.det() >= -SINGULAR_RELATIVE_DET * unit.nn * unit.tt)
         {
             return Err(ImpactError::NotPositiveDefinite {
                 nn: self.w.nn,
                 nt: self.w.nt,
                 tt: self.w.tt,
-                det,
+                det: self.w.det(),
             });
         }
         if self.v_a.n >= 0.0 {
