@@ -167,7 +167,16 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     problem.validate()?;
     let scale = Scale::of(&problem.w, problem.v_a);
-    scale.up(solve_at_order_one(law, &scale.down(problem))?)
+    let unit = scale.down(problem);
+    match solve_at_order_one(law, &unit) {
+        Ok(out) => scale.up(out),
+        // Not a bug of the law when the data do not fit in doubles at order one.
+        Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, &unit) {
+            Some(why) => Err(ImpactError::IllConditioned { law, why, detail }),
+            None => Err(ImpactError::Incoherent { law, detail }),
+        },
+        Err(e) => Err(e),
+    }
 }
 
 /// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in

@@ -172,18 +172,33 @@ pub enum ImpactError {
         /// The law's name.
         law: &'static str,
     },
-    /// A number of the answer is beyond the range of doubles: the impulses scale as
-    /// `|v^A| / |W|`, the energies as `|v^A|² / |W|` (see [`crate::impact`]'s scale
-    /// invariance), and the data's scales are too far apart.
+    /// A number of the answer is beyond the range of doubles (it overflows, or `I_n`
+    /// underflows to 0): the impulses scale as `|v^A| / |W|`, the energies as
+    /// `|v^A|² / |W|` (see [`crate::impact`]'s scale invariance), and the data's scales
+    /// are too far apart.
     #[error(
-        "the answer is beyond the range of doubles: {what} = {value} (impulses scale as \
-         |v^A|/|W|, energies as |v^A|²/|W|)"
+        "the answer is beyond the range of doubles: {what} ≈ {} (impulses scale as \
+         |v^A|/|W|, energies as |v^A|²/|W|)",
+        power_of_ten(*log10)
     )]
     OutOfRange {
         /// The quantity, e.g. `I_n`.
         what: &'static str,
-        /// Its value (infinite).
-        value: Real,
+        /// `log10 |value|`, the value that doubles cannot hold.
+        log10: Real,
+    },
+    /// The data are valid but their scales are too far apart for doubles: at order one
+    /// (see [`crate::impact`]'s scale invariance) an entry of `W` or of `v^A` loses digits
+    /// (it is more than 2^1022 times smaller than the largest), or `μ` is so large that
+    /// products of g, h, p, q overflow; and the law's solution fails on that account.
+    #[error("{law}: the data are beyond the precision of doubles ({why}): {detail}")]
+    IllConditioned {
+        /// The law's name.
+        law: &'static str,
+        /// What in the data is out of scale.
+        why: String,
+        /// How the solution failed.
+        detail: String,
     },
     /// The law's solution fails a coherence condition of [P, Sect. 4.2] beyond rounding:
     /// a bug, never an expected outcome.
@@ -194,6 +209,12 @@ pub enum ImpactError {
         /// The failed condition.
         detail: String,
     },
+}
+
+/// `10^x` written as `±m.me±k`, for any `x` (beyond the range of doubles too).
+fn power_of_ten(x: Real) -> String {
+    let k = x.floor();
+    format!("{:.1}e{k}", (10.0 as Real).powf(x - k))
 }
 
 /// The relative determinant `Δ / (m_nn m_tt)` at or below which `W` is singular to

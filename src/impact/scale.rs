@@ -22,9 +22,12 @@
 //! answer back. Products by powers of two are exact in binary floating point, so where
 //! nothing over- or underflows the answer is bit for bit what the unscaled formulas give;
 //! elsewhere (`Δ` overflowed beyond `|W| ≈ 1e154`, `V²` underflowed below `|v| ≈ 1e-154`)
-//! it is the answer the formulas would give in exact arithmetic, rounded once. An answer
-//! beyond the range of doubles is an error ([`ImpactError::OutOfRange`]).
+//! it is the answer the formulas would give in exact arithmetic, rounded once (results in
+//! the subnormal range, below 2.2e-308, keep fewer digits). An answer beyond the range of
+//! doubles, or an impulse `I_n > 0` that rounds to 0, is an error
+//! ([`ImpactError::OutOfRange`]).
 
+use super::coefficients::Coefficients;
 use super::outcome::Outcome;
 use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem};
 use crate::math::Real;
@@ -66,6 +69,45 @@ impl Scale {
         }
     }
 
+    /// Why the problem `unit = self.down(original)` is beyond the precision of doubles,
+    /// if it is: an entry of `W` or `v^A` that lost digits when brought to order one (it
+    /// is more than 2^1022 times smaller than the largest of its kind), or a coefficient
+    /// g, h, p, q beyond 1e150 (a large `μ`), whose products with another overflow.
+    pub(super) fn out_of_scale(
+        &self,
+        original: &ImpactProblem,
+        unit: &ImpactProblem,
+    ) -> Option<String> {
+        let (w, v) = (&original.w, original.v_a);
+        let entries = [
+            ("m_nn", w.nn, unit.w.nn, self.w),
+            ("m_nt", w.nt, unit.w.nt, self.w),
+            ("m_tt", w.tt, unit.w.tt, self.w),
+            ("v_n^A", v.n, unit.v_a.n, self.v),
+            ("v_t^A", v.t, unit.v_a.t, self.v),
+        ];
+        if let Some((what, x, _, _)) = (entries.iter()).find(|&&(_, x, u, k)| ldexp(u, k) != x) {
+            let (of, largest) = if what.starts_with('m') {
+                ("W", ldexp(1.0, self.w))
+            } else {
+                ("v^A", ldexp(1.0, self.v))
+            };
+            return Some(format!(
+                "{what} = {x:e} is too small against the largest entry of {of} (about {largest:e}) \
+                 to keep its digits"
+            ));
+        }
+        let c = Coefficients::new(&unit.w, unit.mu, unit.v_a);
+        let largest = c.g.abs().max(c.h.abs()).max(c.p.abs()).max(c.q.abs());
+        (largest > 1e150).then(|| {
+            format!(
+                "μ = {:e} makes g, h, p, q as large as {largest:e} against W, and their products \
+                 overflow",
+                original.mu
+            )
+        })
+    }
+
     /// The powers of two of an impulse, a velocity, a work, a coefficient g, h, p, q and
     /// `Δ`, in this order (see the module's table).
     pub(super) fn exponents(&self) -> Exponents {
@@ -82,6 +124,13 @@ impl Scale {
     /// caller's scales; an error if a number of it is beyond the range of doubles.
     pub(super) fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
         let k = self.exponents();
+        // Checked at order one: which number leaves the range, and by how much.
+        if let Some((what, x, e)) = beyond_range(&out, &k) {
+            return Err(ImpactError::OutOfRange {
+                what,
+                log10: x.abs().log10() + Real::from(e) * std::f64::consts::LOG10_2,
+            });
+        }
         out.impulse.n = ldexp(out.impulse.n, k.impulse);
         out.impulse.t = ldexp(out.impulse.t, k.impulse);
         out.v_s = ContactVelocity::new(ldexp(out.v_s.n, k.velocity), ldexp(out.v_s.t, k.velocity));
@@ -90,10 +139,7 @@ impl Scale {
         out.work_t = ldexp(out.work_t, k.work);
         out.coefficients = out.coefficients.scaled(&k);
         out.phases = out.phases.scaled(&k);
-        match first_non_finite(&out) {
-            None => Ok(out),
-            Some((what, value)) => Err(ImpactError::OutOfRange { what, value }),
-        }
+        Ok(out)
     }
 }
 
@@ -112,36 +158,38 @@ pub(super) struct Exponents {
     pub(super) det: i32,
 }
 
-/// The first number of an outcome that is not finite, with its name. (`Δ`, which no
-/// answer reports, may overflow for `|W|` beyond 1e154 and is not checked.)
-fn first_non_finite(out: &Outcome) -> Option<(&'static str, Real)> {
+/// The first number of an outcome at order one that the powers of two `k` take beyond
+/// the range of doubles (infinite), or `I_n > 0` that they bring to 0, with its name, its
+/// value at order one and its power of two. (`Δ`, which no answer reports, may overflow
+/// for `|W|` beyond 1e154 and is not checked; the velocities scale as `v^A` and cannot.)
+fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32)> {
     let c = &out.coefficients;
     let numbers = [
-        ("I_n", out.impulse.n),
-        ("I_t", out.impulse.t),
-        ("v_n^S", out.v_s.n),
-        ("v_t^S", out.v_s.t),
-        ("ΔE", out.delta_e),
-        ("work_n", out.work_n),
-        ("work_t", out.work_t),
-        ("g", c.g),
-        ("h", c.h),
-        ("p", c.p),
-        ("q", c.q),
+        ("I_n", out.impulse.n, k.impulse),
+        ("I_t", out.impulse.t, k.impulse),
+        ("ΔE", out.delta_e, k.work),
+        ("work_n", out.work_n, k.work),
+        ("work_t", out.work_t, k.work),
+        ("g", c.g, k.coefficient),
+        ("h", c.h, k.coefficient),
+        ("p", c.p, k.coefficient),
+        ("q", c.q, k.coefficient),
     ];
     let phases = out.phases.iter().flat_map(|ph| {
         let end = ph.end;
         [
-            ("I_n at the end of a phase", end.i.n),
-            ("I_t at the end of a phase", end.i.t),
-            ("work_n at the end of a phase", end.work_n),
-            ("work_t at the end of a phase", end.work_t),
+            ("I_n at the end of a phase", end.i.n, k.impulse),
+            ("I_t at the end of a phase", end.i.t, k.impulse),
+            ("work_n at the end of a phase", end.work_n, k.work),
+            ("work_t at the end of a phase", end.work_t, k.work),
         ]
     });
-    numbers
-        .into_iter()
-        .chain(phases)
-        .find(|(_, x)| !x.is_finite())
+    let overflow = (numbers.into_iter().chain(phases)).find(|&(_, x, e)| !ldexp(x, e).is_finite());
+    let underflow = || {
+        let i_n = out.impulse.n;
+        (i_n > 0.0 && ldexp(i_n, k.impulse) == 0.0).then_some(("I_n", i_n, k.impulse))
+    };
+    overflow.or_else(underflow)
 }
 
 /// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
