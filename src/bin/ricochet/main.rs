@@ -44,6 +44,12 @@ enum Command {
     Repair(repair::Args),
     /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
     /// of it, or merge the shards.
+    ///
+    /// Exit status: 0 when every run reached its end time; 1 when a run failed (the table
+    /// is written, its rows say why) or the sweep or merge could not be done (nothing is
+    /// written); 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM, 129 by SIGHUP:
+    /// the runs under way stop, and the table of the runs that finished is written, marked
+    /// incomplete (`--merge` refuses it). A second signal exits at once.
     Sweep(sweep::Args),
     /// Draw maps (SVG) of the collision type and the sign of ΔE over the (α, μ) plane, for each law.
     Regions(regions::Args),

@@ -247,9 +247,9 @@ enum Runner<'m> {
 
 /// The signal numbers of SIGINT (Ctrl-C), SIGTERM (`kill`, a service manager stopping the
 /// run) and SIGHUP (the terminal closed), which stop a run; POSIX fixes them.
-const SIGINT: usize = 2;
-const SIGTERM: usize = 15;
-const SIGHUP: usize = 1;
+pub(crate) const SIGINT: usize = 2;
+pub(crate) const SIGTERM: usize = 15;
+pub(crate) const SIGHUP: usize = 1;
 #[cfg(unix)]
 const _: () = assert!(
     SIGINT as i32 == signal_hook::consts::SIGINT
@@ -259,7 +259,7 @@ const _: () = assert!(
 
 /// The exit status of a run stopped by `signal` (0 if none was recorded): 128 + its number,
 /// the shell's convention (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP).
-fn interrupted_status(signal: usize) -> u8 {
+pub(crate) fn interrupted_status(signal: usize) -> u8 {
     let signal = if signal == 0 { SIGINT } else { signal };
     u8::try_from(128 + signal).unwrap_or(130)
 }
@@ -267,7 +267,10 @@ fn interrupted_status(signal: usize) -> u8 {
 /// On a first SIGINT (Ctrl-C), SIGTERM or SIGHUP the run stops at its next step and
 /// finishes its log, and `signal` records which came; a second one (of any of the three)
 /// ends the process at once, with 128 + its number.
-fn install_interrupt(flag: &Arc<AtomicBool>, signal: &Arc<AtomicUsize>) -> anyhow::Result<()> {
+pub(crate) fn install_interrupt(
+    flag: &Arc<AtomicBool>,
+    signal: &Arc<AtomicUsize>,
+) -> anyhow::Result<()> {
     #[cfg(unix)]
     {
         use signal_hook::flag;
