@@ -226,6 +226,8 @@ struct Failure {
     /// Set once `error` holds an error (cheap to test at every message).
     failed: AtomicBool,
     error: Mutex<Option<LogError>>,
+    /// The error's text with its causes, kept for the calls after the one that got it.
+    text: Mutex<String>,
 }
 
 impl Failure {
@@ -238,21 +240,44 @@ impl Failure {
             }
             other => other,
         };
-        if let Ok(mut slot) = self.error.lock() {
-            slot.get_or_insert(error);
+        if let Ok(mut slot) = self.error.lock()
+            && slot.is_none()
+            && !self.failed.load(Ordering::Acquire)
+        {
+            if let Ok(mut text) = self.text.lock() {
+                *text = crate::sim::describe(&error);
+            }
+            *slot = Some(error);
         }
         self.failed.store(true, Ordering::Release);
     }
 
-    /// The error, once: later calls see `Err(SinkFailed)`.
+    /// The error, once: later calls see `Err(SinkFailed)`, which repeats its text.
     fn take(&self) -> Result<(), LogError> {
         if !self.failed.load(Ordering::Acquire) {
             return Ok(());
         }
         match self.error.lock().ok().and_then(|mut slot| slot.take()) {
             Some(error) => Err(error),
-            None => Err(LogError::SinkFailed),
+            None => Err(self.stopped()),
         }
+    }
+
+    /// `SinkFailed` with the first error's text, or `otherwise` if there was none.
+    fn stopped_or(&self, otherwise: &str) -> LogError {
+        let text = self.text.lock().map(|t| t.clone()).unwrap_or_default();
+        LogError::SinkFailed {
+            cause: if text.is_empty() {
+                otherwise.to_owned()
+            } else {
+                text
+            },
+        }
+    }
+
+    /// `SinkFailed` after the first error.
+    fn stopped(&self) -> LogError {
+        self.stopped_or("its thread ended unexpectedly")
     }
 }
 
@@ -382,7 +407,7 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.send_batch()?;
         let (answer, reply) = sync_channel(1);
         self.send(Command::Flush(answer))?;
-        let result = reply.recv().map_err(|_| LogError::SinkFailed)?;
+        let result = reply.recv().map_err(|_| self.failure.stopped())?;
         self.failure.take()?;
         Ok(result?)
     }
@@ -392,14 +417,14 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.send_batch()?;
         self.send(Command::Finish)?;
         self.commands = None;
-        let thread = self.thread.take().ok_or(LogError::SinkFailed)?;
+        let thread = self.thread.take().ok_or_else(|| self.failure.stopped())?;
         match thread.join() {
             Ok(Some(result)) => Ok(result?),
             Ok(None) => {
                 self.failure.take()?;
-                Err(LogError::SinkFailed)
+                Err(self.failure.stopped())
             }
-            Err(_) => Err(LogError::SinkFailed),
+            Err(_) => Err(self.failure.stopped_or("its thread panicked")),
         }
     }
 
@@ -416,8 +441,8 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
 
     fn send(&mut self, command: Command) -> Result<(), LogError> {
         self.failure.take()?;
-        let commands = self.commands.as_ref().ok_or(LogError::SinkFailed)?;
-        commands.send(command).map_err(|_| LogError::SinkFailed)
+        let commands = (self.commands.as_ref()).ok_or_else(|| self.failure.stopped())?;
+        commands.send(command).map_err(|_| self.failure.stopped())
     }
 }
 

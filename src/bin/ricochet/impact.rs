@@ -210,31 +210,46 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         } else {
             answer(&line, args.law)
         };
-        match answer {
-            Ok(ans) => serde_json::to_writer(&mut output, &ans)?,
-            Err(error) => {
-                failed += 1;
-                serde_json::to_writer(
-                    &mut output,
-                    &Failure {
-                        error,
-                        line: number,
-                    },
-                )?;
-            }
+        if answer.is_err() {
+            failed += 1;
         }
-        output.write_all(b"\n")?;
+        let written = match answer {
+            Ok(ans) => serde_json::to_writer(&mut output, &ans),
+            Err(error) => serde_json::to_writer(
+                &mut output,
+                &Failure {
+                    error,
+                    line: number,
+                },
+            ),
+        }
+        .map_err(io::Error::from)
+        .and_then(|()| output.write_all(b"\n"))
         // Answer at once when the caller waits for us (an interactive or co-process use);
         // batch the writes while more input is already buffered.
-        if input.buffer().is_empty() {
-            output.flush().context("writing standard output")?;
+        .and_then(|()| match input.buffer().is_empty() {
+            true => output.flush(),
+            false => Ok(()),
+        });
+        match written {
+            // The reader is gone (`| head`): no one takes the other answers.
+            Err(e) if crate::output::is_broken_pipe(&e) => return Ok(status(failed)),
+            written => written.context("writing standard output")?,
         }
     }
-    output.flush().context("writing standard output")?;
+    match output.flush() {
+        Err(e) if crate::output::is_broken_pipe(&e) => {}
+        flushed => flushed.context("writing standard output")?,
+    }
+    Ok(status(failed))
+}
+
+/// The exit status after `failed` failed lines (said on standard error).
+fn status(failed: usize) -> ExitCode {
     if failed > 0 {
         eprintln!("ricochet impact: {failed} line(s) failed");
-        Ok(ExitCode::FAILURE)
+        ExitCode::FAILURE
     } else {
-        Ok(ExitCode::SUCCESS)
+        ExitCode::SUCCESS
     }
 }

@@ -23,7 +23,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let log = ricochet::log::read(&args.file)
         .with_context(|| format!("cannot inspect {}", args.file.display()))?;
-    print!("{}", report(&log, &args.file.display().to_string()));
+    crate::output::print(&report(&log, &args.file.display().to_string()))?;
     if let Ending::Damaged { offset, error } = &log.ending {
         anyhow::bail!(
             "{} is damaged at byte {offset}: {error} (the summary above stops there)",

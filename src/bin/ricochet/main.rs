@@ -9,6 +9,7 @@ mod check;
 mod impact;
 mod inspect;
 mod live;
+mod output;
 mod regions;
 mod repair;
 mod run;
@@ -72,7 +73,10 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            // The chain of causes, each said once (layers that print their cause and
+            // also return it as their source would repeat it).
+            let messages = err.chain().map(ToString::to_string);
+            eprintln!("error: {}", ricochet::sim::describe_messages(messages));
             ExitCode::FAILURE
         }
     }

@@ -177,7 +177,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Runner::MoreauJean(mj) => mj.scales().gap_tol,
     };
     let live = crate::live::start(&args.live)?;
-    let writer = LogWriter::create(&output, LogOptions::default())?;
+    let cannot_write = || format!("cannot write the log {}", output.display());
+    let writer = LogWriter::create(&output, LogOptions::default()).with_context(cannot_write)?;
     let log = RunLogger::new(
         writer,
         &scene.model,
@@ -185,7 +186,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         (&scene.settings, &overrides),
         &scene.initial,
         gap_tol,
-    )?;
+    )
+    .with_context(cannot_write)?;
     let log = match live {
         Some(tap) => log.with_tap(tap),
         None => log,
@@ -218,14 +220,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         bar.finish_and_clear();
     }
     let rows = std::mem::take(&mut terminal.rows);
-    terminal
-        .log
-        .finish(&summary)
-        .with_context(|| format!("cannot finish the log {}", output.display()))?;
+    let finished = terminal.log.finish(&summary);
 
+    // The report, even when the log could not be finished (a full disk: the report says
+    // when the run stopped, the error why the log is incomplete).
     let printed = report(&scene.name, &output, &summary, &rows, args.quiet);
+    finished.with_context(|| format!("cannot finish the log {}", output.display()))?;
     let signal = signal.load(Ordering::SeqCst);
-    match printed {
+    match crate::output::unless_closed(printed) {
         // After SIGHUP the terminal is gone: the log is finished, the report is not needed.
         Err(_) if signal == SIGHUP => {}
         printed => printed?,
@@ -298,13 +300,18 @@ fn report(
     summary: &RunSummary,
     rows: &[Row],
     quiet: bool,
-) -> anyhow::Result<()> {
+) -> std::io::Result<()> {
     let mut out = std::io::stdout().lock();
     let c = &summary.counters;
+    // The line says the time: the failure without it.
+    let stop = match &summary.stop {
+        StopReason::Failed(e) => format!("failed: {}", e.what()),
+        stop => stop.to_string(),
+    };
     writeln!(
         out,
-        "{name}: stopped at t = {:.6} s, {}\n{} impacts, {} steps ({} rejected), {} rhs evaluations",
-        summary.state.t, summary.stop, c.impacts, c.steps, c.rejected, c.rhs_evals
+        "{name}: stopped at t = {:.6} s, {stop}\n{} impacts, {} steps ({} rejected), {} rhs evaluations",
+        summary.state.t, c.impacts, c.steps, c.rejected, c.rhs_evals
     )?;
     if !quiet {
         if !rows.is_empty() {
@@ -418,7 +425,7 @@ fn report(
         )?;
     }
     writeln!(out, "log: {}", output.display())?;
-    Ok(())
+    out.flush()
 }
 
 /// `x` in at most 9 characters: fixed below 10⁴, scientific above (α is unbounded as the

@@ -135,8 +135,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         1 => "1 thread".to_owned(),
         n => format!("{n} threads"),
     };
-    println!(
-        "{}: {} of {} runs (shard {shard}) on {threads} in {elapsed:.2} s; stops: {}\nwrote {}",
+    crate::output::print(&format!(
+        "{}: {} of {} runs (shard {shard}) on {threads} in {elapsed:.2} s; stops: {}\nwrote {}\n",
         scene.name,
         rows.len(),
         sweep.grid().len(),
@@ -146,7 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             stops.join(", ")
         },
         output.display()
-    );
+    ))?;
     if let Some(why) = &header.incomplete {
         eprintln!(
             "{}: {why}; the table holds those runs and is marked incomplete (`--merge` \
@@ -193,13 +193,13 @@ fn merge_shards(inputs: &[PathBuf], output: Option<PathBuf>) -> anyhow::Result<E
         bail!("the output {} is one of the shards", p.display());
     }
     write_atomically(&output, |w| Ok(write_table(w, &header, &columns, &rows)?))?;
-    println!(
-        "{}: merged {} shards, {} runs\nwrote {}",
+    crate::output::print(&format!(
+        "{}: merged {} shards, {} runs\nwrote {}\n",
         header.scene,
         inputs.len(),
         rows.len(),
         output.display()
-    );
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 
