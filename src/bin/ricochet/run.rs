@@ -78,7 +78,40 @@ struct Terminal<W: Write + Seek + Send + 'static> {
     log: RunLogger<W>,
     progress: Option<ProgressBar>,
     t_end: Real,
-    rows: Vec<Row>,
+    rows: Table,
+}
+
+/// The rows of the impact table that are printed: the first and the last
+/// [`TABLE_ROWS`]` / 2` (a long run's memory must not grow with its impacts).
+#[derive(Default)]
+struct Table {
+    /// The first rows.
+    head: Vec<Row>,
+    /// The last rows, after the head.
+    tail: std::collections::VecDeque<Row>,
+    /// All the impacts seen.
+    count: usize,
+}
+
+impl Table {
+    fn push(&mut self, row: Row) {
+        self.count += 1;
+        if self.head.len() < TABLE_ROWS / 2 {
+            self.head.push(row);
+        } else {
+            if self.tail.len() == TABLE_ROWS / 2 {
+                self.tail.pop_front();
+            }
+            self.tail.push_back(row);
+        }
+    }
+
+    /// The rows kept, with their index among all the impacts.
+    fn rows(&self) -> impl Iterator<Item = (usize, &Row)> {
+        let tail_start = self.count - self.tail.len();
+        (self.head.iter().enumerate())
+            .chain((self.tail.iter().enumerate()).map(move |(k, r)| (tail_start + k, r)))
+    }
 }
 
 impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
@@ -206,7 +239,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         log,
         progress,
         t_end: scene.settings.t_end,
-        rows: Vec::new(),
+        rows: Table::default(),
     };
 
     let interrupt = Arc::new(AtomicBool::new(false));
@@ -298,7 +331,7 @@ fn report(
     name: &str,
     output: &std::path::Path,
     summary: &RunSummary,
-    rows: &[Row],
+    rows: &Table,
     quiet: bool,
 ) -> std::io::Result<()> {
     let mut out = std::io::stdout().lock();
@@ -314,7 +347,7 @@ fn report(
         summary.state.t, c.impacts, c.steps, c.rejected, c.rhs_evals
     )?;
     if !quiet {
-        if !rows.is_empty() {
+        if rows.count > 0 {
             writeln!(out)?;
             writeln!(
                 out,
@@ -332,18 +365,14 @@ fn report(
                 "v_t^S [m/s]",
                 "dE [J]"
             )?;
-            for (k, r) in rows.iter().enumerate() {
-                if rows.len() > TABLE_ROWS && k == TABLE_ROWS / 2 {
+            for (k, r) in rows.rows() {
+                if rows.count > TABLE_ROWS && k == rows.count - TABLE_ROWS / 2 {
                     writeln!(
                         out,
                         "{:>5} … {} more impacts …",
                         "",
-                        rows.len() - TABLE_ROWS
+                        rows.count - TABLE_ROWS
                     )?;
-                }
-                if rows.len() > TABLE_ROWS && k >= TABLE_ROWS / 2 && k < rows.len() - TABLE_ROWS / 2
-                {
-                    continue;
                 }
                 writeln!(
                     out,
