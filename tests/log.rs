@@ -200,6 +200,7 @@ fn impact(k: usize) -> ImpactRecord {
         v_s,
         i_n,
         i_t,
+        support: None,
         delta_u: vec![i_t, i_n, 0.1 * i_t],
         energy_before,
         energy_after: energy_before + work_n + work_t,

@@ -49,7 +49,11 @@ pub fn contact_points(
     let pose_a = collider_pose(model, data, p.a)?;
     let pose_b = collider_pose(model, data, p.b)?;
     let pos_ab = pose_a.inv_mul(&pose_b);
+    // parry's workspace holds indices into the manifolds of the last call (composite
+    // shapes: a polyline's segments); with the manifolds cleared, it must go too, or parry
+    // indexes past them (a ball coming to rest on a polyline panicked, issue 12).
     ws.manifolds.clear();
+    ws.workspace = None;
     let found = DefaultQueryDispatcher.contact_manifolds(
         &pos_ab,
         &*ca.shape.0,

@@ -35,6 +35,14 @@ impl AnyStepper {
             }
         })
     }
+
+    /// Sets the smallest step of the adaptive method (s): below `max(h_min, 10 ε |t|)` it
+    /// gives up with [`super::IntegrateError::StepSizeTooSmall`]. No effect on RK4.
+    pub fn set_h_min(&mut self, h_min: Real) {
+        if let AnyStepper::Dopri5(s) = self {
+            s.set_h_min(h_min);
+        }
+    }
 }
 
 macro_rules! forward {

@@ -329,6 +329,14 @@ impl Dopri5 {
         &self.settings
     }
 
+    /// Sets the smallest step `h_min` (s; ignored unless finite and ≥ 0): see
+    /// [`Dopri5Settings::h_min`].
+    pub fn set_h_min(&mut self, h_min: Real) {
+        if h_min.is_finite() && h_min >= 0.0 {
+            self.settings.h_min = h_min;
+        }
+    }
+
     /// The step the next call of [`step`](Stepper::step) will try first, before capping
     /// by `h_max` and the stop time (s).
     pub fn h_next(&self) -> Real {
@@ -458,6 +466,17 @@ impl Stepper for Dopri5 {
         let mut rhs_failures = 0u32;
         loop {
             let (h, reaches) = clip_step(self.h, self.h_max, t_stop - self.t);
+            // The controller's own step below the floor (not one capped by h_max or
+            // shortened to the stop): accepted steps that small cannot bring the run
+            // anywhere, however long it runs (a first step of 1e-126 s at t = 0).
+            let h_min = smallest_step(self.settings.h_min, self.t);
+            if !reaches && self.h < h_min && self.h < self.h_max {
+                return Err(IntegrateError::StepSizeTooSmall {
+                    t: self.t,
+                    h: self.h,
+                    h_min,
+                });
+            }
             let t1 = if reaches { t_stop } else { self.t + h };
             // A right-hand side that fails at a trial stage (a state the accepted solution
             // never reaches, such as a contact problem without solution far from it)

@@ -87,6 +87,11 @@ impl Method {
     /// The methods that are ODE steppers ([`AnyStepper`] builds them).
     pub const ODE: [Method; 2] = [Method::Dopri5, Method::Rk4];
 
+    /// Whether the method takes a fixed step `dt` (RK4, Moreau–Jean).
+    pub fn is_fixed_step(self) -> bool {
+        matches!(self, Method::Rk4 | Method::MoreauJean)
+    }
+
     /// The name used on the command line and in scene files.
     pub fn name(self) -> &'static str {
         match self {

@@ -49,7 +49,7 @@ pub use live::{LiveOptions, LiveView};
 pub use reader::{Ending, RunLog, SceneInfo, read, read_bytes};
 pub use records::{
     Audit, ContactMode, ContactState, Counters, Energy, ImpactCause, ImpactRecord, Planar,
-    StateRecord,
+    StateRecord, SupportRecord,
 };
 pub use repair::{InputEnd, RepairReport, repair, repair_bytes};
 pub use run::{RunLogger, Tap};

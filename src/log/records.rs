@@ -195,6 +195,18 @@ pub struct Planar {
     pub y: f64,
 }
 
+/// The support of a `rocking_end` entry: the impulse of the persistent contact force at its
+/// point over the hops left (see `ricochet::sim::Support`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SupportRecord {
+    /// Normal part (N·s).
+    pub i_n: f64,
+    /// Tangential part (N·s).
+    pub i_t: f64,
+    /// `t∞ − t`, how long the hops left would have lasted (s).
+    pub duration: f64,
+}
+
 /// Why an impulse was applied (the `cause` of an impact record).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -270,12 +282,18 @@ pub struct ImpactRecord {
     pub v_a: ContactVelocity,
     /// Velocity of separation `v^S` in the contact frame (m/s) [P, Eq. (21)].
     pub v_s: ContactVelocity,
-    /// Normal impulse `I_n` (N·s) [P, Eq. (13)]: `≥ 0`, except on the lifting point of a
-    /// `rocking_end`.
+    /// Normal impulse `I_n` (N·s) [P, Eq. (13)], `≥ 0`. For a `rocking_end`, the contact
+    /// impulse of the hops left: the jump's plus the [`SupportRecord`].
     pub i_n: f64,
-    /// Tangential impulse `I_t` (N·s) [P, Eq. (13)].
+    /// Tangential impulse `I_t` (N·s) [P, Eq. (13)]; for a `rocking_end`, that of the hops
+    /// left.
     pub i_t: f64,
-    /// Jump of the generalized speeds `Δu = M⁻¹ Jᵀ I`, n_u entries (m/s, rad/s) [P, Eq. (16)].
+    /// Only on a `rocking_end`: the part of `i_n`, `i_t` the persistent contact force
+    /// delivers over the hops left (absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<SupportRecord>,
+    /// Jump of the generalized speeds `Δu = M⁻¹ Jᵀ I`, n_u entries (m/s, rad/s) [P, Eq. (16)];
+    /// for a `rocking_end`, of the jump `I − support`.
     pub delta_u: Vec<f64>,
     /// Mechanical energy just before the impact (J).
     pub energy_before: f64,

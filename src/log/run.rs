@@ -11,7 +11,7 @@ use super::foxglove::{Color, about_z, rgba, timestamp, vector3};
 use super::writer::log_message;
 use super::{
     Audit, ContactMode, ContactState, Counters, Energy, FrameTransforms, ImpactCause, ImpactRecord,
-    Log, LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord,
+    Log, LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord, SupportRecord,
 };
 use crate::math::{Pose, Real, Vec2};
 use crate::model::Model;
@@ -371,8 +371,13 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
             q: c.q,
             v_a: ev.v_a,
             v_s: out.v_s,
-            i_n: out.impulse.n,
-            i_t: out.impulse.t,
+            i_n: ev.impulse().n,
+            i_t: ev.impulse().t,
+            support: ev.support.map(|s| SupportRecord {
+                i_n: s.impulse.n,
+                i_t: s.impulse.t,
+                duration: s.duration,
+            }),
             delta_u: ev.delta_u.clone(),
             energy_before: ev.energy_before.total(),
             energy_after: ev.energy_after.total(),

@@ -10,13 +10,14 @@ use toml::Spanned;
 use crate::contact::{ContactError, signed_gap};
 use crate::kinematics::update_positions;
 use crate::math::{Real, Vec2};
-use crate::model::{Body, BodyId, Collider, ColliderId, Material, Model, ModelBuilder};
+use crate::model::{Body, BodyId, Collider, ColliderId, Material, Model, ModelBuilder, ModelError};
 use crate::settings::{IntegratorSettings, Settings};
 use crate::state::{Data, State};
 
 use super::SceneError;
 use super::error::Locator;
-use super::format::{BodySpec, ContactSpec, Pair, RunSpec, SceneFile};
+use super::format::{BodySpec, ContactSpec, Pair, RunSpec, SceneFile, Two};
+use super::ranges;
 use super::units::{Kind, Quantity};
 
 /// The scene file version this loader reads.
@@ -57,6 +58,8 @@ pub(super) struct Builder<'a> {
     pub(super) u0: Vec<Real>,
     /// For each collider, the span its errors point at.
     pub(super) collider_spans: Vec<Range<usize>>,
+    /// For each body, the span its errors point at (its joint).
+    pub(super) body_spans: Vec<Range<usize>>,
     /// For each body, its colliders.
     pub(super) body_colliders: HashMap<BodyId, Vec<ColliderId>>,
 }
@@ -75,8 +78,14 @@ pub(super) fn build(
             ),
         ));
     }
-    if file.name.get_ref().trim().is_empty() {
-        return Err(loc.at(file.name.span(), "the scene needs a name"));
+    if let Some(why) = ranges::bad_name(file.name.get_ref()) {
+        return Err(loc.at(file.name.span(), format!("the scene's name: {why}")));
+    }
+    if file.body.is_empty() && file.chain.is_none() {
+        return Err(loc.at(
+            file.name.span(),
+            "the scene has no body: give at least one [[body]] (or a [chain])",
+        ));
     }
     let settings = settings(&file.run, loc)?;
     let mut b = Builder {
@@ -86,6 +95,7 @@ pub(super) fn build(
         q0: Vec::new(),
         u0: Vec::new(),
         collider_spans: Vec::new(),
+        body_spans: Vec::new(),
         body_colliders: HashMap::new(),
     };
     let gravity = match &file.gravity {
@@ -108,9 +118,12 @@ pub(super) fn build(
         q0,
         u0,
         collider_spans,
+        body_spans,
         ..
     } = b;
-    let model = model.build().map_err(|e| loc.model(e))?;
+    let model = model
+        .build()
+        .map_err(|e| locate_model_error(e, &file, loc))?;
     if let (None, Some(pair)) = (&file.contact, model.pairs().first()) {
         return Err(loc.at(
             collider_spans[pair.a.index()].clone(),
@@ -118,6 +131,7 @@ pub(super) fn build(
         ));
     }
     let initial = State::new(0.0, DVector::from_vec(q0), DVector::from_vec(u0));
+    check_reach(&model, &initial, &body_spans, loc)?;
     check_overlaps(&model, &initial, tolerance, &collider_spans, loc)?;
     Ok(Built {
         name: file.name.into_inner(),
@@ -128,40 +142,85 @@ pub(super) fn build(
     })
 }
 
-/// `[run]` → [`Settings`]: positive finite times, rates and tolerances.
-fn settings(run: &RunSpec, loc: &Locator<'_>) -> Result<Settings, SceneError> {
-    let positive = |v: &Spanned<Real>, what: &str| -> Result<Real, SceneError> {
-        let x = *v.get_ref();
-        if x.is_finite() && x > 0.0 {
-            Ok(x)
-        } else {
-            Err(loc.at(
-                v.span(),
-                format!("{what} must be a positive finite number, got {x}"),
-            ))
+/// A model error located at the body, joint, shape or obstacle it names (its `name`
+/// field), or at the file's `name` when it names none of them: every scene error has a
+/// line and a field.
+fn locate_model_error(e: ModelError, file: &SceneFile, loc: &Locator<'_>) -> SceneError {
+    let named = match &e {
+        ModelError::DuplicateName { name, .. } => Some(name.as_str()),
+        ModelError::BadMass { body, .. } | ModelError::BadInertia { body, .. } => {
+            Some(body.as_str())
         }
+        ModelError::BadParent { joint, .. }
+        | ModelError::BadAxis { joint, .. }
+        | ModelError::DriveOnMultiDof { joint, .. }
+        | ModelError::ForceNotAllowed { joint, .. }
+        | ModelError::NegativeCoefficient { joint, .. } => Some(joint.as_str()),
+        ModelError::UnknownBody { collider, .. } => Some(collider.as_str()),
+        ModelError::BadPair { a, .. } | ModelError::BadMaterial { a, .. } => Some(a.as_str()),
+        _ => None,
+    };
+    let span = named
+        .and_then(|n| {
+            (file.body.iter().map(|b| &b.get_ref().name))
+                .chain(file.obstacle.iter().map(|o| &o.get_ref().name))
+                .find(|name| name.get_ref() == n)
+                .map(|name| name.span())
+        })
+        .unwrap_or(file.name.span());
+    loc.at(span, e.to_string())
+}
+
+/// `[run]` → [`Settings`]: times, rates and tolerances within their ranges
+/// ([`ranges`]), and no more output samples or fixed steps than a run can take.
+fn settings(run: &RunSpec, loc: &Locator<'_>) -> Result<Settings, SceneError> {
+    let within = |v: &Spanned<Real>, what: &str, range: (Real, Real)| -> Result<Real, SceneError> {
+        let (what, unit) = what.split_once('|').unwrap_or((what, ""));
+        ranges::check(*v.get_ref(), range, what, unit).map_err(|m| loc.at(v.span(), m))
     };
     let mut settings = Settings {
-        t_end: positive(&run.t_end, "the end time")?,
+        t_end: within(&run.t_end, "the end time|s", ranges::T_END)?,
         ..Settings::default()
     };
     if let Some(rate) = &run.output_rate {
-        settings.output_rate = positive(rate, "the output rate")?;
+        settings.output_rate = within(rate, "the output rate|Hz", ranges::OUTPUT_RATE)?;
+        let samples = settings.t_end * settings.output_rate;
+        if samples > ranges::SAMPLES {
+            return Err(loc.at(
+                rate.span(),
+                format!(
+                    "t_end × output_rate = {samples:.3e} samples, more than {:e}: lower the rate",
+                    ranges::SAMPLES
+                ),
+            ));
+        }
     }
     let mut integ = IntegratorSettings::default();
     if let Some(spec) = &run.integrator {
         if let Some(m) = spec.method {
             integ.method = m;
         }
-        for (field, value, what) in [
-            (&mut integ.rtol, &spec.rtol, "rtol"),
-            (&mut integ.atol, &spec.atol, "atol"),
-            (&mut integ.dt, &spec.dt, "the step dt"),
-            (&mut integ.h_max, &spec.h_max, "h_max"),
+        for (field, value, what, range) in [
+            (&mut integ.rtol, &spec.rtol, "rtol", ranges::RTOL),
+            (&mut integ.atol, &spec.atol, "atol", ranges::ATOL),
+            (&mut integ.dt, &spec.dt, "the step dt|s", ranges::DT),
+            (&mut integ.h_max, &spec.h_max, "h_max|s", ranges::H_MAX),
         ] {
             if let Some(v) = value {
-                *field = positive(v, what)?;
+                *field = within(v, what, range)?;
             }
+        }
+        let steps = settings.t_end / integ.dt;
+        if let (true, Some(dt)) = (integ.method.is_fixed_step(), &spec.dt)
+            && steps > ranges::FIXED_STEPS
+        {
+            return Err(loc.at(
+                dt.span(),
+                format!(
+                    "t_end / dt = {steps:.3e} steps, more than {:e}: take a longer step",
+                    ranges::FIXED_STEPS
+                ),
+            ));
         }
     }
     settings.integrator = integ;
@@ -251,13 +310,18 @@ impl Builder<'_> {
 
     /// A finite `[x, y]`.
     pub(super) fn pair(&self, v: &Spanned<Pair>) -> Result<Vec2, SceneError> {
-        let [x, y] = *v.get_ref();
-        if x.is_finite() && y.is_finite() {
+        let Two([x, y]) = *v.get_ref();
+        if x.abs() <= ranges::KINEMATIC && y.abs() <= ranges::KINEMATIC {
             Ok(Vec2::new(x, y))
         } else {
             Err(self.err(
                 v.span(),
-                format!("[{x}, {y}] is not a pair of finite numbers"),
+                format!(
+                    "[{}, {}]: each component must be a finite number within ±{:e}",
+                    ranges::number(x),
+                    ranges::number(y),
+                    ranges::KINEMATIC
+                ),
             ))
         }
     }
@@ -270,22 +334,15 @@ impl Builder<'_> {
         v.as_ref().map_or(Ok(default), |v| self.pair(v))
     }
 
-    /// A finite positive number.
-    pub(super) fn positive(
+    /// A number within `range` ([`ranges`]).
+    pub(super) fn within(
         &self,
         v: &Spanned<Real>,
         what: &str,
         unit: &str,
+        range: (Real, Real),
     ) -> Result<Real, SceneError> {
-        let x = *v.get_ref();
-        if x.is_finite() && x > 0.0 {
-            Ok(x)
-        } else {
-            Err(self.err(
-                v.span(),
-                format!("{what} must be positive and finite, got {x} {unit}"),
-            ))
-        }
+        ranges::check(*v.get_ref(), range, what, unit).map_err(|m| self.err(v.span(), m))
     }
 
     /// An optional quantity of the given kind.
@@ -296,11 +353,22 @@ impl Builder<'_> {
     ) -> Result<Option<Real>, SceneError> {
         match v {
             None => Ok(None),
-            Some(v) => v
-                .get_ref()
-                .si(kind)
-                .map(Some)
-                .map_err(|m| self.err(v.span(), m)),
+            Some(v) => {
+                let x = v.get_ref().si(kind).map_err(|m| self.err(v.span(), m))?;
+                if x.abs() <= ranges::KINEMATIC {
+                    Ok(Some(x))
+                } else {
+                    Err(self.err(
+                        v.span(),
+                        format!(
+                            "got {} (SI), beyond ±{:e}: lengths, speeds, angles and rates are \
+                             bounded by it",
+                            ranges::number(x),
+                            ranges::KINEMATIC
+                        ),
+                    ))
+                }
+            }
         }
     }
 
@@ -316,7 +384,10 @@ impl Builder<'_> {
     /// Registers a body or obstacle name (unique, not `world`).
     pub(super) fn name(&mut self, name: &Spanned<String>, what: Named) -> Result<(), SceneError> {
         let n = name.get_ref();
-        if n.is_empty() || n == "world" {
+        if let Some(why) = ranges::bad_name(n) {
+            return Err(self.err(name.span(), why));
+        }
+        if n == "world" {
             return Err(self.err(
                 name.span(),
                 format!("`{n}` cannot name a body or an obstacle"),
@@ -344,8 +415,13 @@ impl Builder<'_> {
     /// `[[body]]` with its joint and shapes. Its parent is already in the model.
     pub(super) fn body(&mut self, spec: &Spanned<BodySpec>) -> Result<(), SceneError> {
         let s = spec.get_ref();
-        let mass = self.positive(&s.mass, "the mass", "kg")?;
-        let inertia = self.positive(&s.inertia, "the moment of inertia", "kg·m²")?;
+        let mass = self.within(&s.mass, "the mass", "kg", ranges::MASS)?;
+        let inertia = self.within(
+            &s.inertia,
+            "the moment of inertia",
+            "kg·m²",
+            ranges::INERTIA,
+        )?;
         let com = self.pair_or(&s.com, Vec2::ZERO)?;
         let name = s.name.get_ref().clone();
         let parent = match &s.joint.get_ref().parent {
@@ -359,15 +435,34 @@ impl Builder<'_> {
         let id = self
             .model
             .add_body(Body::new(&name, mass, com, inertia), joint);
+        self.body_spans.push(s.joint.span());
         self.name(&s.name, Named::Body(id))?;
         self.q0.extend(q);
         self.u0.extend(u);
         for (k, shape) in s.shape.iter().enumerate() {
             let collider_name = match &shape.get_ref().name {
-                Some(n) => n.get_ref().clone(),
+                Some(n) => {
+                    if let Some(why) = ranges::bad_name(n.get_ref()) {
+                        return Err(self.err(n.span(), why));
+                    }
+                    n.get_ref().clone()
+                }
                 None if s.shape.len() == 1 => name.clone(),
                 None => format!("{name}/{k}"),
             };
+            if (self.model.colliders().iter()).any(|c| c.name == collider_name)
+                || (self.names.get(&collider_name)).is_some_and(|n| matches!(n, Named::Obstacle(_)))
+            {
+                let span = shape
+                    .get_ref()
+                    .name
+                    .as_ref()
+                    .map_or(shape.span(), |n| n.span());
+                return Err(self.err(
+                    span,
+                    format!("the shape name `{collider_name}` is used twice"),
+                ));
+            }
             let (geometry, pose) = self.body_shape(shape)?;
             let span = shape.get_ref().kind.span();
             self.add_collider(Collider::new(collider_name, Some(id), geometry, pose), span);
@@ -391,7 +486,7 @@ impl Builder<'_> {
         };
         self.model.default_material(base);
         for p in &c.pair {
-            let [a, b] = p.between.get_ref();
+            let Two([a, b]) = p.between.get_ref();
             let (ca, cb) = (self.colliders_named(a)?, self.colliders_named(b)?);
             if a.get_ref() == b.get_ref() {
                 return Err(self.err(p.between.span(), "a pair needs two different names"));
@@ -420,11 +515,7 @@ impl Builder<'_> {
         }
         match &c.overlap_tolerance {
             None => Ok(DEFAULT_OVERLAP_TOLERANCE),
-            Some(t) if t.get_ref().is_finite() && *t.get_ref() >= 0.0 => Ok(*t.get_ref()),
-            Some(t) => Err(self.err(
-                t.span(),
-                format!("the overlap tolerance must be ≥ 0, got {} m", t.get_ref()),
-            )),
+            Some(t) => self.within(t, "the overlap tolerance", "m", ranges::OVERLAP),
         }
     }
 
@@ -462,16 +553,43 @@ impl Builder<'_> {
     }
 
     pub(super) fn friction(&self, mu: &Spanned<Real>) -> Result<Real, SceneError> {
-        let x = *mu.get_ref();
-        if x.is_finite() && x >= 0.0 {
-            Ok(x)
-        } else {
-            Err(self.err(
-                mu.span(),
-                format!("the coefficient of friction mu must be ≥ 0 and finite, got {x}"),
-            ))
+        self.within(mu, "the coefficient of friction mu", "", ranges::FRICTION)
+    }
+}
+
+/// Every body at the initial state within `1e4 L` of the world origin (`L` the largest
+/// shape of a body, [`crate::sim::Scales`]): the dynamics refers its spatial quantities to
+/// the origin, and a body far from it loses digits as `(r/L)²` (the chain moved to
+/// x = 1e3 m, 3700 L, takes 7 times the steps; at 2e4 m, 300 times).
+fn check_reach(
+    model: &Model,
+    initial: &State,
+    spans: &[Range<usize>],
+    loc: &Locator<'_>,
+) -> Result<(), SceneError> {
+    let mut data = Data::new(model);
+    update_positions(model, &mut data, initial.t, initial.q.as_slice())
+        .map_err(|e| loc.at(0..0, e.to_string()))?;
+    let length = crate::sim::Scales::of(model, &IntegratorSettings::default()).length;
+    let reach = ranges::REACH * length;
+    for (k, body) in model.bodies().iter().enumerate() {
+        let r = data.body_com[k]
+            .length()
+            .max(data.body_pose[k].translation.length());
+        if r.is_nan() || r > reach {
+            return Err(loc.at(
+                spans.get(k).cloned().unwrap_or(0..0),
+                format!(
+                    "body `{}` starts {} m from the world origin, beyond 1e4 times the largest \
+                     shape ({} m): move the scene nearer the origin",
+                    body.name,
+                    ranges::number(r),
+                    ranges::number(reach)
+                ),
+            ));
         }
     }
+    Ok(())
 }
 
 /// Every contact pair at the initial state: shapes may not overlap by more than

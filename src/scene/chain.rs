@@ -9,6 +9,7 @@ use crate::model::{Body, Collider, Joint};
 use super::SceneError;
 use super::build::{Builder, Named};
 use super::format::ChainSpec;
+use super::ranges;
 use super::units::Kind;
 
 impl Builder<'_> {
@@ -29,13 +30,18 @@ impl Builder<'_> {
                 format!("a chain has 1 to 10000 links, got {n}"),
             ));
         }
-        let length = self.positive(&c.length, "the link length", "m")?;
-        let mass = self.positive(&c.mass, "the link mass", "kg")?;
-        let radius = self.positive(&c.radius, "the link radius", "m")?;
+        let length = self.within(&c.length, "the link length", "m", ranges::SIZE)?;
+        let mass = self.within(&c.mass, "the link mass", "kg", ranges::MASS)?;
+        let radius = self.within(&c.radius, "the link radius", "m", ranges::SIZE)?;
         let at = self.pair_or(&c.at, Vec2::ZERO)?;
         let angle = self.quantity_or(&c.angle, Kind::Angle, 0.0)?;
         let rate = self.quantity_or(&c.rate, Kind::AngularRate, 0.0)?;
         let prefix = c.name.as_ref().map_or("link", |s| s.get_ref().as_str());
+        if let Some(name) = &c.name
+            && let Some(why) = ranges::bad_name(&format!("{prefix}{}", c.links.get_ref()))
+        {
+            return Err(self.err(name.span(), why));
+        }
         let mut parent = None;
         for i in 1..=n {
             let name = format!("{prefix}{i}");
@@ -54,6 +60,8 @@ impl Builder<'_> {
             let id = self
                 .model
                 .add_body(body, Joint::revolute(&name, parent, placement));
+            self.body_spans
+                .push(c.at.as_ref().map_or(spec.span(), |a| a.span()));
             self.name(&Spanned::new(spec.span(), name.clone()), Named::Body(id))?;
             let shape = SharedShape::capsule(Vec2::ZERO, Vec2::new(0.0, -length), radius);
             self.add_collider(

@@ -36,6 +36,8 @@ pub enum SceneError {
         message: String,
     },
     /// The model builder rejected the scene (a check the scene loader does not repeat).
+    /// No longer produced: such errors are located at the body or obstacle they name
+    /// ([`SceneError::At`]); kept for the callers that match on it.
     #[error("{path}: {error}", path = path.display())]
     Model {
         /// The scene file.
@@ -94,14 +96,6 @@ impl Locator<'_> {
     /// A located error from a TOML parse or deserialization error.
     pub fn toml(&self, err: &toml::de::Error) -> SceneError {
         self.at(err.span().unwrap_or(0..0), err.message().trim_end())
-    }
-
-    /// A model error, not located.
-    pub fn model(&self, err: ModelError) -> SceneError {
-        SceneError::Model {
-            path: self.path.to_owned(),
-            error: err,
-        }
     }
 }
 

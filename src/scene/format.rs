@@ -12,7 +12,42 @@ use crate::math::Real;
 use super::units::Quantity;
 
 /// A 2-D vector written `[x, y]`.
-pub(super) type Pair = [Real; 2];
+pub(super) type Pair = Two<Real>;
+
+/// Exactly two values written `[a, b]`: more or fewer are an error (serde's arrays read
+/// the first two of a longer list and drop the rest silently).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Two<T>(pub [T; 2]);
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Two<T> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Exactly<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Exactly<T> {
+            type Value = Two<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a list of exactly two values")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Two<T>, A::Error> {
+                use serde::de::Error;
+                let short = |n| A::Error::invalid_length(n, &"a list of exactly two values");
+                let a = seq.next_element()?.ok_or_else(|| short(0))?;
+                let b = seq.next_element()?.ok_or_else(|| short(1))?;
+                let mut more = 0;
+                while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    more += 1;
+                }
+                if more > 0 {
+                    return Err(short(2 + more));
+                }
+                Ok(Two([a, b]))
+            }
+        }
+        d.deserialize_seq(Exactly(std::marker::PhantomData))
+    }
+}
 
 /// The whole file.
 #[derive(Debug, Deserialize)]
@@ -80,7 +115,7 @@ pub(super) struct ContactSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct PairSpec {
-    pub between: Spanned<[Spanned<String>; 2]>,
+    pub between: Spanned<Two<Spanned<String>>>,
     #[serde(default)]
     pub law: Option<Law>,
     #[serde(default)]

@@ -10,6 +10,7 @@ use crate::model::{BodyId, Joint, JointForce, JointKind, PrescribedMotion};
 use super::SceneError;
 use super::build::Builder;
 use super::format::{DriveSpec, JointSpec, JointType};
+use super::ranges;
 use super::units::{Kind, Quantity};
 
 impl Builder<'_> {
@@ -87,15 +88,11 @@ impl Builder<'_> {
             stiffness: self.non_negative(&s.stiffness)?,
             rest: self.quantity_or(&s.rest, coordinate, 0.0)?,
             damping: self.non_negative(&s.damping)?,
-            effort: self.quantity_or(
-                if ty == JointType::Revolute {
-                    &s.torque
-                } else {
-                    &s.force
-                },
-                Plain,
-                0.0,
-            )?,
+            effort: self.force_element(if ty == JointType::Revolute {
+                &s.torque
+            } else {
+                &s.force
+            })?,
         };
         if let Some(drive) = &s.drive {
             joint.drive = Some(self.drive(drive, q[0], coordinate, rate)?);
@@ -105,10 +102,32 @@ impl Builder<'_> {
     }
 
     pub(super) fn non_negative(&self, v: &Option<Spanned<Quantity>>) -> Result<Real, SceneError> {
-        let x = self.quantity_or(v, Kind::Plain, 0.0)?;
+        let x = self.force_element(v)?;
         match v {
             Some(v) if x < 0.0 => Err(self.err(v.span(), format!("must be non-negative, got {x}"))),
             _ => Ok(x),
+        }
+    }
+
+    /// A force element of a joint (stiffness, damping, torque or force; SI, plain), within
+    /// `±1e12` ([`ranges::FORCE_ELEMENT`]); 0 when absent.
+    pub(super) fn force_element(&self, v: &Option<Spanned<Quantity>>) -> Result<Real, SceneError> {
+        let Some(v) = v else { return Ok(0.0) };
+        let x = v
+            .get_ref()
+            .si(Kind::Plain)
+            .map_err(|m| self.err(v.span(), m))?;
+        if x.abs() <= ranges::FORCE_ELEMENT {
+            Ok(x)
+        } else {
+            Err(self.err(
+                v.span(),
+                format!(
+                    "got {}, beyond ±{:e} (a force element)",
+                    ranges::number(x),
+                    ranges::FORCE_ELEMENT
+                ),
+            ))
         }
     }
 

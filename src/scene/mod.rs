@@ -32,6 +32,7 @@ mod chain;
 mod error;
 mod format;
 mod joint;
+mod ranges;
 mod shape;
 mod units;
 

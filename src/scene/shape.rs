@@ -11,7 +11,8 @@ use crate::model::Collider;
 
 use super::SceneError;
 use super::build::{Builder, Named};
-use super::format::{ObstacleSpec, ObstacleType, Pair, ShapeSpec, ShapeType};
+use super::format::{ObstacleSpec, ObstacleType, Pair, ShapeSpec, ShapeType, Two};
+use super::ranges;
 use super::units::Kind;
 
 impl Builder<'_> {
@@ -95,7 +96,7 @@ impl Builder<'_> {
 
     pub(super) fn radius(&self, r: &Option<Spanned<Real>>) -> Result<Real, SceneError> {
         match r {
-            Some(r) => self.positive(r, "the radius", "m"),
+            Some(r) => self.within(r, "the radius", "m", ranges::SIZE),
             None => Err(self.err(0..0, "missing radius")),
         }
     }
@@ -120,14 +121,18 @@ impl Builder<'_> {
             return Err(self.err(0..0, "missing half extents"));
         };
         let v = self.pair(h)?;
-        if v.x > 0.0 && v.y > 0.0 {
+        let size = |x: Real| ranges::inside(x, ranges::SIZE);
+        if size(v.x) && size(v.y) {
             Ok(SharedShape::cuboid(v.x, v.y))
         } else {
             Err(self.err(
                 h.span(),
                 format!(
-                    "the half extents must be positive, got [{}, {}] m",
-                    v.x, v.y
+                    "the half extents must be within [{:e}, {:e}] m, got [{}, {}] m",
+                    ranges::SIZE.0,
+                    ranges::SIZE.1,
+                    v.x,
+                    v.y
                 ),
             ))
         }
@@ -155,10 +160,32 @@ impl Builder<'_> {
                 pts[(i + 2) % n] - pts[(i + 1) % n],
             ) > 0.0
         });
-        if !convex {
+        // Convex turns alone admit a star (a pentagram turns left at every vertex, twice
+        // around): a simple convex polygon turns once around, by 2π.
+        let turning: Real = (0..n)
+            .map(|i| {
+                let (e1, e2) = (
+                    pts[(i + 1) % n] - pts[i],
+                    pts[(i + 2) % n] - pts[(i + 1) % n],
+                );
+                cross(e1, e2).atan2(e1.dot(e2))
+            })
+            .sum();
+        let simple = (turning - std::f64::consts::TAU).abs() < 1e-6;
+        if !convex || !simple {
             return Err(self.err(
                 points.span(),
-                "the points must be the vertices of a convex polygon, in order, no three in line",
+                if convex {
+                    format!(
+                        "the points turn {:.0} times around: a polygon must be simple (not a \
+                         star), convex, its vertices in order",
+                        turning / std::f64::consts::TAU
+                    )
+                } else {
+                    "the points must be the vertices of a convex polygon, in order, no three \
+                     in line"
+                        .to_owned()
+                },
             ));
         }
         SharedShape::convex_polyline(pts)
@@ -173,7 +200,7 @@ impl Builder<'_> {
         let pts: Vec<Vec2> = points
             .get_ref()
             .iter()
-            .map(|&[x, y]| Vec2::new(x, y))
+            .map(|&Two([x, y])| Vec2::new(x, y))
             .collect();
         if pts.len() < min {
             return Err(self.err(
@@ -181,8 +208,17 @@ impl Builder<'_> {
                 format!("at least {min} points are needed, got {}", pts.len()),
             ));
         }
-        if pts.iter().any(|p| !p.is_finite()) {
-            return Err(self.err(points.span(), "the points must be finite"));
+        if pts
+            .iter()
+            .any(|p| !(p.x.abs() <= ranges::KINEMATIC && p.y.abs() <= ranges::KINEMATIC))
+        {
+            return Err(self.err(
+                points.span(),
+                format!(
+                    "the points must be finite, each coordinate within ±{:e} m",
+                    ranges::KINEMATIC
+                ),
+            ));
         }
         Ok(pts)
     }
@@ -231,10 +267,14 @@ impl Builder<'_> {
                 let Some(points) = &s.points else {
                     return Err(self.err(s.kind.span(), "missing points"));
                 };
-                (
-                    SharedShape::polyline(self.points(points, 2)?, None),
-                    Pose::IDENTITY,
-                )
+                let pts = self.points(points, 2)?;
+                if pts.windows(2).any(|w| w[0] == w[1]) {
+                    return Err(self.err(
+                        points.span(),
+                        "two consecutive points of a polyline are the same",
+                    ));
+                }
+                (SharedShape::polyline(pts, None), Pose::IDENTITY)
             }
             ObstacleType::Cuboid => (
                 self.cuboid(&s.half_extents)?,

@@ -13,10 +13,12 @@
 //!    they add up to — the same normal impulse, each hop's Coulomb friction with it — and
 //!    the contact stays closed. No impulse pulls. The time `t∞` the hops would end is
 //!    extrapolated from their geometric decay, and the passage to persistent contact is
-//!    reported then, named by the mode it enters. Only a rocking body, whose plastic impact
-//!    on one corner lifts the other too slowly to resolve, has that corner held down by a
-//!    projection of the velocity ([`ImpactMap::close`], cause `rocking_end`): no impulse
-//!    `≥ 0` at that instant can do it.
+//!    reported then, named by the mode it enters. A rocking body, whose plastic impact on
+//!    one corner lifts the other too slowly to resolve, cannot be held down by an impulse
+//!    `≥ 0` at that instant: only gravity, over the hops left, brings it down. Its ledger
+//!    entries (cause `rocking_end`) report the contact impulse of those hops — the jump
+//!    that brings the points to rest ([`ImpactMap::close`]) plus the [`Support`] of the
+//!    closed points until `t∞` — which is `≥ 0`.
 //! 3. **modes**: the touching points that do not approach get their persistent-contact
 //!    modes (open, stick, slide) from the complementarity problem at the acceleration
 //!    level ([`Persistent::select`]). **Painlevé's paradox**: no consistent mode
@@ -29,10 +31,13 @@
 use super::impact_map::pair_name;
 use super::observer::{PairMode, Transition};
 use super::persistent::{Candidate, Closed, Hold, pair_points};
-use super::{AtTime, ImpactCause, ImpactEvent, Level, Observer, SimError, Simulation, StopReason};
+use super::{
+    AtTime, ImpactCause, ImpactEvent, Level, Observer, SimError, Simulation, StopReason, Support,
+};
 use crate::contact::{ManifoldWorkspace, PairContact};
 use crate::dynamics::forward_dynamics;
 use crate::events::Event;
+use crate::impact::Impulse;
 use crate::integrate::Stepper;
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Mode};
@@ -148,11 +153,16 @@ impl Simulation<'_> {
                         // too slowly to resolve; no impulse ≥ 0 holds it down.
                         let after = self.touching(t, y)?;
                         if !self.slow_separations(t, y, &after)?.is_empty() {
-                            let points = self.points_below(&after, self.scales.v_rest);
+                            let held: Vec<Touch> = (after.iter())
+                                .filter(|p| p.v_n <= self.scales.v_rest.max(p.still))
+                                .copied()
+                                .collect();
+                            let points = self.points_below(&held, self.scales.v_rest);
                             let (q, u) = y[..2 * n].split_at_mut(n);
-                            let closing =
+                            let mut closing =
                                 self.map
                                     .close(self.model, &points, self.scales.v_rest, t, q, u)?;
+                            self.support(t, y, &held, &mut closing)?;
                             events.extend(closing);
                         }
                     }
@@ -456,6 +466,82 @@ impl Simulation<'_> {
             .filter(|(p, a_n)| p.v_n <= self.scales.v_rest_at(**a_n))
             .map(|(p, _)| *p)
             .collect())
+    }
+
+    /// The [`Support`] of each entry of a rocking end at `t` (`y` just after its jump): the
+    /// persistent contact force `λ` of the `held` points at that state, times the time
+    /// `t∞ − t` the hops left would have lasted (the latest `t∞` of the pairs; at least the
+    /// lifting point's own hop, `2 v_n⁻ / |a_n|` with the most negative free normal
+    /// acceleration of the held points, when `t∞` could not be extrapolated). `λ` is that of the consistent set of modes with the most open
+    /// points, the one the mode selection that follows takes.
+    fn support(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        held: &[Touch],
+        closing: &mut [ImpactEvent],
+    ) -> Result<(), SimError> {
+        let until = (held.iter())
+            .filter_map(|p| self.accumulating[p.pair.index()].as_ref()?.t_inf)
+            .fold(t, Real::max);
+        let n = self.model.nq();
+        let (q, u) = (&y[..n], &y[n..2 * n]);
+        // The lifting points' own hops: v_n⁻ / |a_n| up and as long down.
+        let hop = (closing.iter())
+            .filter(|ev| ev.v_a.n > 0.0)
+            .map(|ev| ev.v_a.n)
+            .fold(0.0, Real::max);
+        forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
+        let candidates: Vec<Candidate> = (held.iter())
+            .map(|p| Candidate {
+                pair: p.pair,
+                local: p.local,
+                mu: self.material(p.pair).mu,
+                slip: None,
+            })
+            .collect();
+        let sel = self.system.persistent.select(
+            self.model,
+            &self.sampler,
+            (t, q, u),
+            &candidates,
+            1e3 * self.scales.v_tiny,
+        )?;
+        self.restore_persistent();
+        let open = |s: &lcp::Solution| s.modes.iter().filter(|m| **m == Mode::Open).count();
+        let Some(chosen) = sel.solutions.iter().max_by_key(|s| open(s)) else {
+            return Err(SimError::Contact {
+                t,
+                message: "the end of a rocking accumulation: the closed contacts have no \
+                          consistent mode"
+                    .to_owned(),
+            });
+        };
+        let a_lift = (sel.free.iter().copied()).fold(0.0, |m: Real, a| m.min(a));
+        let own = if a_lift < 0.0 {
+            2.0 * hop / -a_lift
+        } else {
+            0.0
+        };
+        let duration = (until - t).max(own);
+        for ev in closing.iter_mut() {
+            let Some(i) = (0..sel.points.len()).min_by(|&i, &j| {
+                let d = |k: usize| (sel.points[k].frame.point() - ev.frame.point()).length();
+                d(i).total_cmp(&d(j))
+            }) else {
+                continue;
+            };
+            let f = &sel.points[i].frame;
+            let force = chosen.x[2 * i] * f.n + chosen.x[2 * i + 1] * f.t;
+            ev.support = Some(Support {
+                impulse: Impulse::new(
+                    duration * force.dot(ev.frame.n),
+                    duration * force.dot(ev.frame.t),
+                ),
+                duration,
+            });
+        }
+        Ok(())
     }
 
     /// An accumulation of impacts ends at `t` on the pairs of the `slow` points (the hop

@@ -78,10 +78,10 @@ pub enum ImpactCause {
     /// small to resolve, made plastic — the scene's law (one point) or Moreau's law
     /// (several) with `e = 0` and the pair's friction; the contact stays closed.
     AccumulationEnd,
-    /// The end of a rocking accumulation: the projection of the velocity onto the closed
-    /// contacts ([`ImpactMap::close`]) when the plastic impact that ends an accumulation
-    /// lifts another touching point too slowly to resolve; its normal impulse on the
-    /// lifting point is negative.
+    /// The end of a rocking accumulation, when the plastic impact that ends an
+    /// accumulation lifts another touching point too slowly to resolve: the contact
+    /// impulse of the hops left, until `t∞` — the jump that brings the points to rest
+    /// ([`ImpactMap::close`]) and the [`Support`] the closed contacts give until `t∞`.
     RockingEnd,
 }
 
@@ -124,9 +124,50 @@ pub struct ImpactEvent {
     pub energy_before: Energy,
     /// Energies after the impact, from the model (J).
     pub energy_after: Energy,
+    /// For a [`ImpactCause::RockingEnd`]: the impulse of the persistent contact force at
+    /// this point until the hops left would have ended. `None` for every other impact.
+    pub support: Option<Support>,
+}
+
+/// The impulse a closed contact point delivers over the hops left of a rocking
+/// accumulation (see [`ImpactCause::RockingEnd`]).
+///
+/// A rocking body (a block on its corners) cannot be brought to rest by impulses `≥ 0`
+/// at one instant: the plastic impact on one corner lifts the other, and only gravity,
+/// over the infinitely many ever smaller hops left, brings it down. Their contact impulse
+/// over `[t, t∞]` is, by the momentum balance over that interval,
+///
+/// ```text
+/// Jᵀ I = M (u(t∞) − u⁻) − ∫ (τ − h) dt
+/// ```
+///
+/// and the run delivers the same: the jump `P` at `t` that brings the points to rest
+/// (the kinetic-metric projection, [`ImpactMap::close`]), then the persistent contact
+/// force `λ` of the closed points over `[t, t∞]`. The ledger entry reports
+/// `I = P + S` with the support `S = λ (t∞ − t)` (λ constant over that short time), which
+/// is `≥ 0` where `P` alone pulls the lifting corner down: the weight it carries over the
+/// remaining hops is larger than the impulse that stops them (a block: `I_n = m g Δt/2 −
+/// I_B ω/(2b)` on the lifting corner, and `Δt ≥` its hop `2 I_B ω/(m g b)`).
+/// `Δu = M⁻¹ Jᵀ P` and Eq. (29) hold for the jump `P = I − S`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Support {
+    /// `S = λ (t∞ − t)` in the entry's frame `(n, t)` (N·s).
+    pub impulse: Impulse,
+    /// `t∞ − t`, how long the hops left would have lasted (s).
+    pub duration: Real,
 }
 
 impl ImpactEvent {
+    /// The contact impulse of the entry in its frame `(n, t)` (N·s): the law's, plus the
+    /// [`Support`] of a rocking end.
+    pub fn impulse(&self) -> Impulse {
+        let i = self.outcome.impulse;
+        match self.support {
+            Some(s) => Impulse::new(i.n + s.impulse.n, i.t + s.impulse.t),
+            None => i,
+        }
+    }
+
     /// The change of mechanical energy computed from the model (J): Eq. (29) plus the
     /// work of the prescribed motions, Eq. (28).
     pub fn energy_change(&self) -> Real {
@@ -395,6 +436,7 @@ impl ImpactMap {
             delta_u,
             energy_before,
             energy_after,
+            support: None,
         }))
     }
 
@@ -490,10 +532,12 @@ impl ImpactMap {
     ///                     stop; W = J M⁻¹ Jᵀ; the other impulses are zero)
     /// ```
     ///
-    /// whose impulses may be of either sign and lie outside the friction cone: a rocking
-    /// body whose lifting corner separates at `v_n ≤ v_rest` is pulled down (`P_n < 0`).
-    /// What it removes is the energy of the hops left, of the order of `m v_rest²`, and it
-    /// is in the ledger.
+    /// whose impulses may be of either sign: the jump pulls a rocking body's lifting corner
+    /// down (`P_n < 0`). It is only the first part of the contact impulse of the hops it
+    /// replaces; the contacts stage adds the second, the [`Support`] of the closed points
+    /// until `t∞`, and the ledger entry reports their sum, which is `≥ 0`. What the jump
+    /// removes is the energy of the hops left, of the order of `m v_rest²`, and it is in
+    /// the ledger (Eq. (29) of the jump).
     pub fn close(
         &mut self,
         model: &Model,
@@ -668,6 +712,7 @@ impl ImpactMap {
                 delta_u: delta_u.iter().copied().collect(),
                 energy_before: before,
                 energy_after: running,
+                support: None,
             });
         }
         if let Some(last) = events.last_mut() {

@@ -132,8 +132,8 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
             kind: ev.outcome.kind.name(),
             case: ev.outcome.case.number(),
             alpha: ev.outcome.coefficients.alpha(),
-            i_n: ev.outcome.impulse.n,
-            i_t: ev.outcome.impulse.t,
+            i_n: ev.impulse().n,
+            i_t: ev.impulse().t,
             v_s: (ev.outcome.v_s.n, ev.outcome.v_s.t),
             delta_e: ev.outcome.delta_e,
         });
@@ -460,7 +460,10 @@ fn report(
 /// `x` in at most 9 characters: fixed below 10⁴, scientific above (α is unbounded as the
 /// approach speed vanishes).
 fn short(x: Real) -> String {
-    if x.abs() < 1e4 {
+    if !x.is_finite() {
+        // No approach speed, no α (as in the log, where it is absent).
+        "—".to_owned()
+    } else if x.abs() < 1e4 {
         format!("{x:.4}")
     } else {
         format!("{x:.2e}")

@@ -673,6 +673,7 @@ impl<'m> MoreauJean<'m> {
                 delta_u: self.contacts.delta_u(i),
                 energy_before: before,
                 energy_after: after,
+                support: None,
             };
             self.counters.impacts += 1;
             observer
