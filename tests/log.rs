@@ -873,7 +873,7 @@ impl Seek for FullDisk {
 
 /// The writer thread meets an I/O error: a later call (a write, `flush` or `finish`)
 /// reports it as an MCAP error, once; after it the writer refuses everything with
-/// `SinkFailed`; nothing hangs or panics.
+/// `SinkFailed`, which repeats the error's text; nothing hangs or panics.
 #[test]
 fn an_io_error_of_the_writer_thread_is_reported_by_a_later_call() {
     let run = synthetic();
@@ -923,9 +923,14 @@ fn an_io_error_of_the_writer_thread_is_reported_by_a_later_call() {
         panic!("expected the disk's I/O error, got {error:?}");
     };
     assert_eq!(io.kind(), std::io::ErrorKind::StorageFull);
-    // Reported once; afterwards the writer has stopped.
-    assert!(matches!(log.state(&state(0)), Err(LogError::SinkFailed)));
-    assert!(matches!(log.finish(), Err(LogError::SinkFailed)));
+    // Reported once; afterwards the writer has stopped, and says after which error.
+    let disk_error = io.to_string();
+    for after in [log.state(&state(0)), log.finish().map(|_| ())] {
+        match after {
+            Err(LogError::SinkFailed { cause }) => assert!(cause.contains(&disk_error), "{cause}"),
+            other => panic!("expected SinkFailed, got {other:?}"),
+        }
+    }
 }
 
 #[test]

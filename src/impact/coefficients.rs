@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::problem::{ContactVelocity, ImpactMatrix};
+use super::scale::{Exponents, ldexp};
 use crate::math::Real;
 
 /// The coefficients that decide the type of a collision [P, Eqs. (24), (34)–(36)], in the
@@ -20,7 +21,9 @@ pub struct Coefficients {
     /// `q = m_nn + μ m_nt`: `dv_n/dI_n` during reverse sliding.
     pub q: Real,
     /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)]; exactly 0 when `W` is singular to working
-    /// precision ([`ImpactMatrix::is_singular`]).
+    /// precision ([`ImpactMatrix::is_singular`]). In an [`Outcome`](super::Outcome) it is
+    /// computed at order one and scaled back by `s²`, so it may overflow for `|W|` beyond
+    /// about 1e154.
     pub det: Real,
     /// `|v_n^A|` (m/s).
     v_n: Real,
@@ -45,6 +48,21 @@ impl Coefficients {
             det: if w.is_singular() { 0.0 } else { w.det() },
             v_n: -v_a.n,
             v_t: v_a.t,
+        }
+    }
+
+    /// The coefficients of the problem `(s W, c v^A)` from those of `(W, v^A)`, with the
+    /// powers of two of [`Scale::exponents`](super::scale::Scale::exponents): g, h, p, q
+    /// scale by `s`, `Δ` by `s²`, the velocities by `c`.
+    pub(super) fn scaled(&self, k: &Exponents) -> Self {
+        Self {
+            g: ldexp(self.g, k.coefficient),
+            h: ldexp(self.h, k.coefficient),
+            p: ldexp(self.p, k.coefficient),
+            q: ldexp(self.q, k.coefficient),
+            det: ldexp(self.det, k.det),
+            v_n: ldexp(self.v_n, k.velocity),
+            v_t: ldexp(self.v_t, k.velocity),
         }
     }
 

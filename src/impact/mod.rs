@@ -37,6 +37,7 @@ mod outcome;
 mod path;
 mod poisson;
 mod problem;
+mod scale;
 mod stronge;
 
 pub use coefficients::{Coefficients, SignCase};
@@ -50,6 +51,7 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::math::Real;
+use scale::Scale;
 
 /// The hypothesis that ends the collision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -157,8 +159,29 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 /// `v_n^S ≥ 0`, `|I_t| ≤ μ I_n`, the sign of `v_t^S` matching the type, and
 /// Eqs. (22)–(23)); compute `ΔE` (Eq. 29) and its split into the works of the normal and
 /// tangential impulses along the law's path.
+///
+/// The problem is solved at order one: `W` and `v^A` are divided by the powers of two of
+/// their largest entries and the answer is scaled back (the laws are homogeneous; see
+/// `scale.rs`), so that it holds over the whole range of finite doubles. An answer beyond
+/// that range is [`ImpactError::OutOfRange`].
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     problem.validate()?;
+    let scale = Scale::of(&problem.w, problem.v_a);
+    let unit = scale.down(problem);
+    match solve_at_order_one(law, &unit) {
+        Ok(out) => scale.up(out),
+        // Not a bug of the law when the data do not fit in doubles at order one.
+        Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, &unit) {
+            Some(why) => Err(ImpactError::IllConditioned { law, why, detail }),
+            None => Err(ImpactError::Incoherent { law, detail }),
+        },
+        Err(e) => Err(e),
+    }
+}
+
+/// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
+/// `[1, 2)`.
+fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     let mirrored = problem.v_a.t < 0.0;
     let pb = if mirrored {
         ImpactProblem {

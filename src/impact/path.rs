@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::coefficients::Coefficients;
 use super::outcome::CollisionType;
 use super::problem::{ContactVelocity, ImpactMatrix, Impulse};
+use super::scale::{Exponents, ldexp};
 use crate::math::Real;
 
 /// A point of the collision, reached after the normal impulse `i.n`.
@@ -157,6 +158,22 @@ impl Phases {
         let k = self.len() - 1;
         self.ends[k].i = i;
         self.ends[k].v = v;
+        self
+    }
+
+    /// The phases of the problem `(s W, c v^A)` from those of `(W, v^A)`, with the powers
+    /// of two of [`Scale::exponents`](super::scale::Scale::exponents).
+    pub(super) fn scaled(mut self, k: &Exponents) -> Self {
+        self.v_a =
+            ContactVelocity::new(ldexp(self.v_a.n, k.velocity), ldexp(self.v_a.t, k.velocity));
+        for p in &mut self.ends {
+            *p = PathPoint {
+                i: Impulse::new(ldexp(p.i.n, k.impulse), ldexp(p.i.t, k.impulse)),
+                v: ContactVelocity::new(ldexp(p.v.n, k.velocity), ldexp(p.v.t, k.velocity)),
+                work_n: ldexp(p.work_n, k.work),
+                work_t: ldexp(p.work_t, k.work),
+            };
+        }
         self
     }
 

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::scale::Scale;
 use crate::math::Real;
 
 /// The 2×2 matrix `W = [[m_nn, m_nt], [m_nt, m_tt]]` of [P, Eq. (20)], mapping the
@@ -171,6 +172,34 @@ pub enum ImpactError {
         /// The law's name.
         law: &'static str,
     },
+    /// A number of the answer is beyond the range of doubles (it overflows, or `I_n`
+    /// underflows to 0): the impulses scale as `|v^A| / |W|`, the energies as
+    /// `|v^A|² / |W|` (see [`crate::impact`]'s scale invariance), and the data's scales
+    /// are too far apart.
+    #[error(
+        "the answer is beyond the range of doubles: {what} ≈ {} (impulses scale as \
+         |v^A|/|W|, energies as |v^A|²/|W|)",
+        power_of_ten(*log10)
+    )]
+    OutOfRange {
+        /// The quantity, e.g. `I_n`.
+        what: &'static str,
+        /// `log10 |value|`, the value that doubles cannot hold.
+        log10: Real,
+    },
+    /// The data are valid but their scales are too far apart for doubles: at order one
+    /// (see [`crate::impact`]'s scale invariance) an entry of `W` or of `v^A` loses digits
+    /// (it is more than 2^1022 times smaller than the largest), or `μ` is so large that
+    /// products of g, h, p, q overflow; and the law's solution fails on that account.
+    #[error("{law}: the data are beyond the precision of doubles ({why}): {detail}")]
+    IllConditioned {
+        /// The law's name.
+        law: &'static str,
+        /// What in the data is out of scale.
+        why: String,
+        /// How the solution failed.
+        detail: String,
+    },
     /// The law's solution fails a coherence condition of [P, Sect. 4.2] beyond rounding:
     /// a bug, never an expected outcome.
     #[error("incoherent {law} solution: {detail}")]
@@ -180,6 +209,12 @@ pub enum ImpactError {
         /// The failed condition.
         detail: String,
     },
+}
+
+/// `10^x` written as `±m.me±k`, for any `x` (beyond the range of doubles too).
+fn power_of_ten(x: Real) -> String {
+    let k = x.floor();
+    format!("{:.1}e{k}", (10.0 as Real).powf(x - k))
 }
 
 /// The relative determinant `Δ / (m_nn m_tt)` at or below which `W` is singular to
@@ -194,7 +229,8 @@ impl ImpactProblem {
 
     /// Checks the data: finite numbers, `W` positive semidefinite with `m_nn > 0` (the
     /// normal direction must be mobile; see [`ImpactMatrix::is_singular`]), `v_n^A < 0`,
-    /// `e ∈ [0, 1]`, `μ ≥ 0`.
+    /// `e ∈ [0, 1]`, `μ ≥ 0`. The sign of `Δ` is tested on `W` divided by the power of
+    /// two of its largest entry, so that `m_nn m_tt` neither overflows nor underflows.
     pub fn validate(&self) -> Result<(), ImpactError> {
         let all_finite = self.w.nn.is_finite()
             & self.w.nt.is_finite()
@@ -206,16 +242,16 @@ impl ImpactProblem {
         if !all_finite {
             return Err(self.first_non_finite());
         }
-        let det = self.w.det();
-        if !(self.w.nn > 0.0
-            && self.w.tt >= 0.0
-            && det >= -SINGULAR_RELATIVE_DET * self.w.nn * self.w.tt)
+        let unit = Scale::of(&self.w, self.v_a).matrix_down(&self.w);
+        if !(unit.nn > 0.0
+            && unit.tt >= 0.0
+            && unit.det() >= -SINGULAR_RELATIVE_DET * unit.nn * unit.tt)
         {
             return Err(ImpactError::NotPositiveDefinite {
                 nn: self.w.nn,
                 nt: self.w.nt,
                 tt: self.w.tt,
-                det,
+                det: self.w.det(),
             });
         }
         if self.v_a.n >= 0.0 {

@@ -25,8 +25,15 @@ pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     };
     let compression = path.at(i_c);
     let restitution_work = -pb.e * pb.e * compression.work_n;
+    // With a singular W, sticking after G freezes v_n (dv_n/dI_n = Δ/m_tt = 0): if the
+    // path sticks at v_n = 0 the restitution does no work, and no finite impulse ends the
+    // collision (the jam of Newton's law and of Poisson's compression).
     let Some(i_n) = path.reach_normal_work(&compression, restitution_work) else {
-        return LawSolution::failed(Failure::Incoherent("restitution work never reached"));
+        return LawSolution::failed(if c.det == 0.0 {
+            Failure::Jam
+        } else {
+            Failure::Incoherent("restitution work never reached")
+        });
     };
     let phases = path.phases_until(i_n);
     let end = phases.end();

@@ -162,6 +162,10 @@ pub enum LogError {
     Thread(#[source] std::io::Error),
     /// The log writer stopped after an error that was already reported (or its thread
     /// ended unexpectedly); nothing more is written.
-    #[error("the log writer has stopped after an earlier error")]
-    SinkFailed,
+    #[error("the log writer has stopped after an error: {cause}")]
+    SinkFailed {
+        /// The first error, with its causes (e.g. `No space left on device`), or why the
+        /// writer's thread ended.
+        cause: String,
+    },
 }

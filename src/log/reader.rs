@@ -3,7 +3,11 @@
 //!
 //! The file is read linearly from the start (the summary section is not needed), so a
 //! file whose writer was killed before finishing it is read up to its last complete
-//! record; [`RunLog::ending`] says whether the file was complete.
+//! record (with those of a chunk cut short, as far as they decode); [`RunLog::ending`] says whether the file was complete. The file is untrusted:
+//! it is read by the linear reading of [`repair`](super::repair), which sizes no
+//! allocation from a length field beyond what the file's bytes can hold and checks every
+//! CRC (chunks, data section, summary), so that a damaged byte is reported as
+//! [`Ending::Damaged`], never a panic or an abort.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -14,6 +18,8 @@ use serde_json::{Map, Value};
 
 use super::LogError;
 use super::records::{Audit, ImpactRecord, StateRecord};
+use super::repair::InputEnd;
+use super::repair::scan::scan;
 use super::schemas::{Topic, metadata};
 
 /// The `scene` metadata of a log.
@@ -28,14 +34,27 @@ pub struct SceneInfo {
 /// How a log file ends.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Ending {
-    /// The file ends with its summary section, footer and magic: the writer finished it.
+    /// The file ends with its summary section, footer and magic, and every CRC matches:
+    /// the writer finished it and nothing was changed since.
     Complete,
-    /// The file stops early or is damaged, e.g. the process writing it was killed.
-    /// Everything before the first unreadable record was read.
+    /// The file stops early, e.g. the process writing it was killed. Everything before the
+    /// first record cut short was read.
     Truncated {
         /// Offset of the end of the last record read (bytes).
         offset: u64,
         /// Why reading stopped.
+        error: String,
+    },
+    /// A record of the file does not decode, or a CRC does not match its bytes: the file
+    /// was damaged after it was written. Everything before the damaged record was read;
+    /// when it is the data section's CRC that fails (checked at its end), some record read
+    /// was damaged but none can tell which (the records of chunks are covered by their
+    /// chunk's CRC, the metadata records only by the data section's).
+    Damaged {
+        /// Offset of the record that does not decode, or of the end of the data section
+        /// (bytes).
+        offset: u64,
+        /// What is wrong.
         error: String,
     },
 }
@@ -111,9 +130,13 @@ pub fn read_bytes_with(
 /// Reads a log held in memory, as far as it goes.
 ///
 /// Errors only when the bytes are not an MCAP file at all, or when a record of ricochet's
-/// (a metadata record, an `/impacts` or `/state` message) does not decode. A file that
-/// stops early is not an error: the result holds what was read and
-/// [`Ending::Truncated`].
+/// (a metadata record, an `/impacts` or `/state` message) does not decode, or a message
+/// is on a channel that was not declared. A file that stops early or is damaged is not an
+/// error: the result holds what was read and [`Ending::Truncated`] or
+/// [`Ending::Damaged`].
+///
+/// Memory: the records of one chunk at a time, decompressed; no allocation beyond 256
+/// times the length of `bytes` (LZ4's largest expansion), whatever its length fields say.
 ///
 /// Numbers decode bit-exactly only when `serde_json`'s `float_roundtrip` feature is on
 /// (the tests have it, through the `jsonschema` dev-dependency); without it about 7 % of
@@ -140,26 +163,51 @@ fn read_log(
         time_range: None,
         ending: Ending::Complete,
     };
-    let mut topics: BTreeMap<u16, String> = BTreeMap::new();
-    let mut last_state: Option<Vec<u8>> = None;
-    let records = mcap::read::ChunkFlattener::new(bytes)?;
-    let mut first = true;
-    for record in records {
-        let record = match record {
-            Ok(record) => record,
-            // Not even a header: not an MCAP file.
-            Err(err) if first => return Err(LogError::Mcap(err)),
-            Err(err) => {
-                log.ending = Ending::Truncated {
-                    offset: 0,
-                    error: err.to_string(),
-                };
-                break;
-            }
-        };
-        first = false;
+    let mut reading = Reading::default();
+    // The records of the chunk at which reading stopped (as far as they decode) are kept
+    // aside until it is known whether the chunk was cut short (they are what was written)
+    // or damaged (they may not be).
+    let mut salvaged = vec![];
+    let scanned = scan(bytes, &mut |record, torn| {
+        if torn {
+            salvaged.push(record.into_owned());
+            Ok(())
+        } else {
+            reading.record(&mut log, record, &mut on_state)
+        }
+    })?;
+    if matches!(scanned.end, InputEnd::InsideRecord { .. }) {
+        for record in salvaged {
+            reading.record(&mut log, record, &mut on_state)?;
+        }
+    }
+    log.library = scanned.header.library;
+    log.ending = ending(bytes, scanned.end, scanned.stopped_at);
+    if let Some(data) = reading.last_state {
+        log.last_state = Some(decode(Topic::State.name(), &data)?);
+    }
+    Ok(log)
+}
+
+/// What [`read_bytes`] keeps between records.
+#[derive(Default)]
+struct Reading {
+    /// The topic of each channel id.
+    topics: BTreeMap<u16, String>,
+    /// The payload of the last `/state` message.
+    last_state: Option<Vec<u8>>,
+}
+
+impl Reading {
+    /// Reads a channel, message or metadata record into `log`.
+    fn record(
+        &mut self,
+        log: &mut RunLog,
+        record: Record<'_>,
+        on_state: &mut Option<&mut dyn FnMut(StateRecord)>,
+    ) -> Result<(), LogError> {
+        let Reading { topics, last_state } = self;
         match record {
-            Record::Header(header) => log.library = header.library,
             Record::Channel(channel) => {
                 topics.insert(channel.id, channel.topic);
             }
@@ -182,22 +230,34 @@ fn read_log(
                         if let Some(f) = on_state.as_mut() {
                             f(decode(Topic::State.name(), &data)?);
                         }
-                        last_state = Some(data.into_owned());
+                        *last_state = Some(data.into_owned());
                     }
                     _ => {}
                 }
             }
-            Record::Metadata(m) => read_metadata(&mut log, m)?,
+            Record::Metadata(m) => read_metadata(log, m)?,
             _ => {}
         }
+        Ok(())
     }
-    if let Ending::Truncated { offset, .. } = &mut log.ending {
-        *offset = truncation_offset(bytes);
+}
+
+/// How a file read by [`scan`] ends, from how its reading stopped at `offset`.
+fn ending(bytes: &[u8], end: InputEnd, offset: u64) -> Ending {
+    match end {
+        InputEnd::Complete => Ending::Complete,
+        // The data was all read; what follows it is cut short, or damaged if the file
+        // still ends with the magic.
+        InputEnd::SummaryDamaged { error } if bytes.ends_with(mcap::MAGIC) => Ending::Damaged {
+            offset,
+            error: format!("the summary section: {error}"),
+        },
+        InputEnd::Unreadable { error } => Ending::Damaged { offset, error },
+        end => Ending::Truncated {
+            offset,
+            error: end.to_string(),
+        },
     }
-    if let Some(data) = last_state {
-        log.last_state = Some(decode(Topic::State.name(), &data)?);
-    }
-    Ok(log)
 }
 
 /// Stores a metadata record of ricochet's in `log`; ignores others.
@@ -254,25 +314,4 @@ fn decode<T: DeserializeOwned>(what: &str, data: &[u8]) -> Result<T, LogError> {
         what: what.to_owned(),
         source,
     })
-}
-
-/// The offset just past the last complete top-level record of `bytes` (after the magic).
-fn truncation_offset(bytes: &[u8]) -> u64 {
-    let mut offset = mcap::MAGIC.len() as u64;
-    let mut rest = bytes.get(mcap::MAGIC.len()..).unwrap_or_default();
-    // A record is an opcode (1 byte), a length (u64 LE) and that many bytes.
-    while rest.len() >= 9 {
-        let mut len = [0u8; 8];
-        len.copy_from_slice(&rest[1..9]);
-        let Some(end) = usize::try_from(u64::from_le_bytes(len))
-            .ok()
-            .and_then(|len| len.checked_add(9))
-            .filter(|&end| end <= rest.len())
-        else {
-            break;
-        };
-        offset += end as u64;
-        rest = &rest[end..];
-    }
-    offset
 }

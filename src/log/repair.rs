@@ -17,7 +17,7 @@ use super::LogError;
 
 mod copy;
 mod lz4;
-mod scan;
+pub(super) mod scan;
 
 use copy::{Copier, Survey};
 use scan::scan;

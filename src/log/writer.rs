@@ -39,9 +39,10 @@ pub enum Compression {
 pub struct LogOptions {
     /// Compression of the chunks.
     pub compression: Compression,
-    /// Target size of the messages of a chunk before compression (bytes). A process killed without
-    /// finishing the file loses at most the chunk being written, unless
-    /// [`LogWriter::flush`] was called since.
+    /// Target size of the messages of the first chunks before compression (bytes); it
+    /// doubles after every 1,024 chunks, up to 4 MiB (the writer keeps an index of every
+    /// chunk in memory until the end). A process killed without finishing the file loses
+    /// at most the chunk being written, unless [`LogWriter::flush`] was called since.
     pub chunk_size: u64,
 }
 

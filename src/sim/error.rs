@@ -40,16 +40,8 @@ impl std::fmt::Display for StopReason {
         match self {
             StopReason::EndTime => f.write_str("reached the end time"),
             StopReason::Interrupted { .. } => f.write_str("interrupted"),
-            StopReason::Failed(e) => {
-                // The whole chain: what failed, and why.
-                write!(f, "failed: {e}")?;
-                let mut cause = std::error::Error::source(e);
-                while let Some(c) = cause {
-                    write!(f, ": {c}")?;
-                    cause = c.source();
-                }
-                Ok(())
-            }
+            // The whole chain, what failed and why, each said once.
+            StopReason::Failed(e) => write!(f, "failed: {}", describe(e)),
         }
     }
 }
@@ -179,7 +171,8 @@ impl AtTime for ObserverError {
     fn at(self, t: Real) -> SimError {
         SimError::Observer {
             t,
-            message: self.to_string(),
+            // With its causes: "MCAP error" alone does not say that the disk is full.
+            message: describe(&*self),
         }
     }
 }
@@ -189,6 +182,135 @@ impl SimError {
     pub fn at(t: Real, e: impl AtTime) -> SimError {
         e.at(t)
     }
+
+    /// The time of the failure (s), when the error has one.
+    pub fn time(&self) -> Option<Real> {
+        match self {
+            SimError::Dynamics { t, .. }
+            | SimError::Kinematics { t, .. }
+            | SimError::ContactQuery { t, .. }
+            | SimError::Contact { t, .. }
+            | SimError::Impact { t, .. }
+            | SimError::Simultaneous { t, .. }
+            | SimError::Observer { t, .. } => Some(*t),
+            SimError::Integrate(
+                IntegrateError::Rhs { t, .. }
+                | IntegrateError::StepSizeTooSmall { t, .. }
+                | IntegrateError::NonFinite { t, .. },
+            ) => Some(*t),
+            SimError::Locate(EventError::Function { t, .. } | EventError::NonFinite { t, .. })
+            | SimError::Settle(EventError::Function { t, .. } | EventError::NonFinite { t, .. }) => {
+                Some(*t)
+            }
+            _ => None,
+        }
+    }
+
+    /// What failed and why, without the time (for a line that says it already): the
+    /// error and its causes, each said once.
+    pub fn what(&self) -> String {
+        let said = self.time().map(time_text).into_iter().collect();
+        join_messages(chain_messages(self), said)
+    }
+}
+
+/// An error and its causes ([`std::error::Error::source`]), joined by `: `, each said
+/// once: a cause whose message the text already holds is left out, and so is a statement
+/// `at t = X` of a time it already states. (The layers of a run's errors each say their
+/// time, and many also print their cause's message, which the chain then gives again:
+/// `at t = 0.5: at t = 0.5: q[0] is not finite (NaN): at t = 0.5: q[0] is not finite
+/// (NaN)` becomes `at t = 0.5: q[0] is not finite (NaN)`.)
+pub fn describe(error: &(dyn std::error::Error + 'static)) -> String {
+    join_messages(chain_messages(error), Vec::new())
+}
+
+/// [`describe`] for the messages of a chain of errors, outermost first (e.g. from
+/// `anyhow::Error::chain`).
+pub fn describe_messages(messages: impl IntoIterator<Item = String>) -> String {
+    join_messages(messages, Vec::new())
+}
+
+/// The messages of `error` and of its causes, outermost first.
+fn chain_messages(error: &(dyn std::error::Error + 'static)) -> impl Iterator<Item = String> {
+    std::iter::successors(Some(error), |e| e.source()).map(ToString::to_string)
+}
+
+/// The messages joined by `: `, without the times in `said` (`t = X`) nor those stated
+/// before, nor a message the text already holds.
+fn join_messages(messages: impl IntoIterator<Item = String>, mut said: Vec<String>) -> String {
+    let mut text = String::new();
+    for message in messages {
+        let kept = without_said_times(&message, &mut said);
+        let kept = kept.trim_matches(|c: char| c == ':' || c == ' ');
+        if kept.is_empty() || text.contains(kept) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(kept);
+    }
+    text
+}
+
+/// `message` without its statements of the times in `said`; the times it states first
+/// are added to `said`.
+fn without_said_times(message: &str, said: &mut Vec<String>) -> String {
+    let mut kept = String::new();
+    let mut rest = message;
+    while let Some(found) = next_time(rest) {
+        kept.push_str(found.before);
+        if !said.iter().any(|s| s == found.time) {
+            said.push(found.time.to_owned());
+            kept.push_str(found.statement);
+        }
+        rest = found.after;
+    }
+    kept.push_str(rest);
+    kept
+}
+
+/// A statement of a time in a message.
+struct TimeStatement<'a> {
+    /// The text before it.
+    before: &'a str,
+    /// `t = X`.
+    time: &'a str,
+    /// The whole statement: `at t = X: ` (a prefix) or ` at t = X` (in a sentence).
+    statement: &'a str,
+    /// The text after it.
+    after: &'a str,
+}
+
+/// The first statement `at t = X` in `text`.
+fn next_time(text: &str) -> Option<TimeStatement<'_>> {
+    let at = text.find("at t = ")?;
+    let number = at + "at t = ".len();
+    let number_end = number
+        + text[number..]
+            .find(|c: char| !(c.is_ascii_alphanumeric() || "+-.".contains(c)))
+            .unwrap_or(text.len() - number);
+    let start = if text[..at].ends_with(' ') {
+        at - 1
+    } else {
+        at
+    };
+    let end = if text[number_end..].starts_with(": ") {
+        number_end + 2
+    } else {
+        number_end
+    };
+    Some(TimeStatement {
+        before: &text[..start],
+        time: &text[at + "at ".len()..number_end],
+        statement: &text[start..end],
+        after: &text[end..],
+    })
+}
+
+/// `t = X` as the errors print the time `t`.
+fn time_text(t: Real) -> String {
+    format!("t = {t}")
 }
 
 /// A [`SimError`] raised inside the integrator or the event location (by the right-hand

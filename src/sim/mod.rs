@@ -33,7 +33,7 @@ mod system;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use accumulation::Scales;
-pub use error::{AtTime, Nested, SimError, StopReason};
+pub use error::{AtTime, Nested, SimError, StopReason, describe, describe_messages};
 pub use gaps::GapFunctions;
 pub use impact_map::{ImpactCause, ImpactEvent, ImpactMap, MaterialOverride, Support};
 pub use moreau_jean::{MoreauJean, MoreauJeanSettings, SolverReport};

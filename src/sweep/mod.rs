@@ -180,6 +180,14 @@ pub enum SweepError {
         /// Where it was seen first.
         other: String,
     },
+    /// A table of a sweep that was interrupted: it lacks runs that did not finish.
+    #[error("{file} is incomplete ({why}): run its shard again before merging")]
+    Incomplete {
+        /// The table.
+        file: String,
+        /// Its `# incomplete` line.
+        why: String,
+    },
     /// Runs in no table.
     #[error("{count} of {runs} runs are missing: {first}")]
     Missing {

@@ -3,6 +3,7 @@
 
 use std::num::NonZeroUsize;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
@@ -124,10 +125,21 @@ impl<'s> Sweep<'s> {
         shard: Shard,
         rows: &[Row],
     ) -> Result<(), SweepError> {
+        self.write_table_under(out, &self.header(shard), rows)
+    }
+
+    /// [`Sweep::write_table`] under `header` (e.g. [`Sweep::header`] marked
+    /// [`incomplete`](Header::incomplete)).
+    pub fn write_table_under(
+        &self,
+        out: impl std::io::Write,
+        header: &Header,
+        rows: &[Row],
+    ) -> Result<(), SweepError> {
         let (nq, nu) = (self.scene.model.nq(), self.scene.model.nu());
         write_table(
             out,
-            &self.header(shard),
+            header,
             &self.columns(),
             rows.iter().map(|r| r.fields(nq, nu)),
         )
@@ -138,23 +150,8 @@ impl<'s> Sweep<'s> {
     /// `method` says), with no log ([`NullObserver`]). A run that cannot start, fails or
     /// panics is a row with that stop reason, never an error of the sweep.
     pub fn run_point(&self, index: usize) -> Row {
-        let values: Vec<Value> = (0..self.targets.len())
-            .map(|j| self.grid.value(index, j))
-            .collect();
-        let outcome = match catch_unwind(AssertUnwindSafe(|| self.simulate(&values))) {
-            Ok(outcome) => outcome,
-            Err(payload) => {
-                let what = payload
-                    .downcast_ref::<&str>()
-                    .map(|s| (*s).to_owned())
-                    .or_else(|| payload.downcast_ref::<String>().cloned())
-                    .unwrap_or_else(|| "unknown".to_owned());
-                Err(NotRun {
-                    stop: "panic",
-                    detail: format!("the run panicked: {what}"),
-                })
-            }
-        };
+        let values = self.values(index);
+        let outcome = caught(|| self.simulate(&values, None));
         Row {
             index,
             values,
@@ -162,8 +159,37 @@ impl<'s> Sweep<'s> {
         }
     }
 
-    /// One run with the overrides `values`.
-    fn simulate(&self, values: &[Value]) -> Result<RunResult, NotRun> {
+    /// [`Sweep::run_point`] under the interrupt flag `interrupt`: `None` if the flag is set
+    /// before the run starts, or while it runs (the run stops at its next step: it did not
+    /// finish, and gives no row).
+    pub fn run_point_until(&self, index: usize, interrupt: Option<&AtomicBool>) -> Option<Row> {
+        let stopped = || interrupt.is_some_and(|flag| flag.load(Ordering::SeqCst));
+        if stopped() {
+            return None;
+        }
+        let values = self.values(index);
+        let outcome = caught(|| self.simulate(&values, interrupt));
+        let interrupted = matches!(&outcome, Ok(r) if r.stop == INTERRUPTED);
+        (!interrupted).then_some(Row {
+            index,
+            values,
+            outcome,
+        })
+    }
+
+    /// The values of the parameters at the point `index`, in the grid's order.
+    fn values(&self, index: usize) -> Vec<Value> {
+        (0..self.targets.len())
+            .map(|j| self.grid.value(index, j))
+            .collect()
+    }
+
+    /// One run with the overrides `values`, stopped by `interrupt` when it is set.
+    fn simulate(
+        &self,
+        values: &[Value],
+        interrupt: Option<&AtomicBool>,
+    ) -> Result<RunResult, NotRun> {
         let mut settings = self.scene.settings.clone();
         let mut initial = self.scene.initial.clone();
         let mut overrides = MaterialOverride::default();
@@ -192,9 +218,9 @@ impl<'s> Sweep<'s> {
         let model = &self.scene.model;
         let summary = match settings.integrator.method {
             Method::MoreauJean => MoreauJean::new(model, &settings, overrides)
-                .map(|mut mj| mj.run(&initial, &mut NullObserver, None)),
+                .map(|mut mj| mj.run(&initial, &mut NullObserver, interrupt)),
             Method::Dopri5 | Method::Rk4 => Simulation::new(model, &settings, overrides)
-                .map(|mut sim| sim.run(&initial, &mut NullObserver, None)),
+                .map(|mut sim| sim.run(&initial, &mut NullObserver, interrupt)),
         }
         .map_err(|e| NotRun {
             stop: "error",
@@ -224,17 +250,51 @@ impl<'s> Sweep<'s> {
         shard: Shard,
         done: &(dyn Fn(&Row) + Sync),
     ) -> Vec<Row> {
+        self.run_until(pool, shard, done, None)
+    }
+
+    /// [`Sweep::run_in`] under the interrupt flag `interrupt` (Ctrl-C): once it is set, the
+    /// runs under way stop at their next step and no other run starts. The rows are those
+    /// of the runs that finished (all of them when the flag stays clear), in increasing
+    /// run index.
+    pub fn run_until(
+        &self,
+        pool: &rayon::ThreadPool,
+        shard: Shard,
+        done: &(dyn Fn(&Row) + Sync),
+        interrupt: Option<&AtomicBool>,
+    ) -> Vec<Row> {
         let runs: Vec<usize> = shard.runs(self.grid.len()).collect();
-        pool.install(|| {
+        let rows: Vec<Option<Row>> = pool.install(|| {
             runs.par_iter()
                 .map(|&index| {
-                    let row = self.run_point(index);
+                    let row = self.run_point_until(index, interrupt)?;
                     done(&row);
-                    row
+                    Some(row)
                 })
                 .collect()
-        })
+        });
+        rows.into_iter().flatten().collect()
     }
+}
+
+/// The [`StopReason::name`](crate::sim::StopReason::name) of an interrupted run.
+const INTERRUPTED: &str = "interrupted";
+
+/// The outcome of `run`, or a `panic` row with the panic's message if it panics (a bug:
+/// the sweep goes on with the other runs).
+fn caught(run: impl FnOnce() -> Result<RunResult, NotRun>) -> Result<RunResult, NotRun> {
+    catch_unwind(AssertUnwindSafe(run)).unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown".to_owned());
+        Err(NotRun {
+            stop: "panic",
+            detail: format!("the run panicked: {what}"),
+        })
+    })
 }
 
 /// A rayon pool of `threads` threads (`None`: one per core, or `RAYON_NUM_THREADS`).
@@ -385,5 +445,32 @@ impl Row {
             }
         }
         f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_is_a_row_with_its_message() {
+        // The panic's message goes to the hook (stderr) too; keep the test output quiet.
+        let hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(|_| {}));
+        let got = caught(|| panic!("index out of bounds: the len is 3 but the index is 7"));
+        let formatted = caught(|| panic!("{} {}", "formatted", 42));
+        std::panic::set_hook(hook);
+        assert_eq!(
+            got,
+            Err(NotRun {
+                stop: "panic",
+                detail: "the run panicked: index out of bounds: the len is 3 but the index is 7"
+                    .to_owned()
+            })
+        );
+        assert_eq!(
+            formatted.unwrap_err().detail,
+            "the run panicked: formatted 42"
+        );
     }
 }

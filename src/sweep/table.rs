@@ -17,7 +17,10 @@
 //! scene file's text and the scene's name, the parameters (canonical: equal values print
 //! alike), the number of runs of the whole grid; and the shard. Readers that know `#`
 //! comments skip them (`pandas.read_csv(f, comment="#")`, `polars.read_csv(f,
-//! comment_prefix="#")`). Fields are quoted only when they must be (RFC 4180).
+//! comment_prefix="#")`). Fields are quoted only when they must be (RFC 4180). A sweep
+//! that was interrupted writes the rows of the runs that finished under one more line,
+//! `# incomplete 3 of 4 runs finished: interrupted by SIGTERM`, which [`merge`] refuses
+//! (and readers of format 1 before it, which know no such line).
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -46,6 +49,11 @@ pub struct Header {
     pub runs: usize,
     /// The share of the grid in this table.
     pub shard: Shard,
+    /// Set when the table holds only the runs that finished before the sweep was
+    /// interrupted: how many of the shard's runs and why (`# incomplete 3 of 4 runs
+    /// finished: interrupted by SIGTERM`). [`merge`] refuses such a table. `None` for a
+    /// complete table, whose header has no such line.
+    pub incomplete: Option<String>,
 }
 
 impl Header {
@@ -59,6 +67,7 @@ impl Header {
             params: grid.params().iter().map(|p| p.canonical()).collect(),
             runs: grid.len(),
             shard,
+            incomplete: None,
         }
     }
 
@@ -74,6 +83,9 @@ impl Header {
         }
         let _ = writeln!(s, "# runs {}", self.runs);
         let _ = writeln!(s, "# shard {}", self.shard);
+        if let Some(why) = &self.incomplete {
+            let _ = writeln!(s, "# incomplete {why}");
+        }
         s
     }
 
@@ -96,6 +108,7 @@ impl Header {
         let mut params = Vec::new();
         let mut runs = None;
         let mut shard = None;
+        let mut incomplete = None;
         for line in it {
             let body = line
                 .strip_prefix("# ")
@@ -124,6 +137,7 @@ impl Header {
                             .map_err(|e| bad(line, &e.to_string()))?,
                     )
                 }
+                "incomplete" => incomplete = Some(value.to_owned()),
                 _ => return Err(bad(line, "an unknown header line")),
             }
         }
@@ -139,6 +153,7 @@ impl Header {
             params,
             runs: runs.ok_or_else(|| missing("runs"))?,
             shard: shard.ok_or_else(|| missing("shard"))?,
+            incomplete,
         })
     }
 }
@@ -220,12 +235,18 @@ pub fn read_table(mut input: impl BufRead, file: &str) -> Result<Table, SweepErr
 /// Joins the shards of one sweep into the whole table, rows by run index, under the
 /// header of the whole grid (shard `0/1`): the result is byte for byte the table of the
 /// sweep run unsharded. Errors: no input, tables of different sweeps (format, version,
-/// scene, parameters, runs, columns), a row outside its table's shard, a run index that
-/// appears twice, runs missing.
+/// scene, parameters, runs, columns), a table marked incomplete (an interrupted shard), a
+/// row outside its table's shard, a run index that appears twice, runs missing.
 pub fn merge(
     tables: Vec<Table>,
 ) -> Result<(Header, Vec<String>, Vec<csv::StringRecord>), SweepError> {
     let first = tables.first().ok_or(SweepError::NoShards)?;
+    if let Some(t) = tables.iter().find(|t| t.header.incomplete.is_some()) {
+        return Err(SweepError::Incomplete {
+            file: t.file.clone(),
+            why: t.header.incomplete.clone().unwrap_or_default(),
+        });
+    }
     let reference = first.header.clone();
     let columns = first.columns.clone();
     for t in &tables[1..] {

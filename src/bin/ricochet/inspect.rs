@@ -24,7 +24,10 @@ pub struct Args {
 
 /// Prints the scene, the settings, the impact ledger and the energy audit of a log. A log
 /// cut short (a killed process) or without an audit (a run that stopped early) is read as
-/// far as it goes, and the summary says so; only a file that is not a ricochet log fails.
+/// far as it goes, and the summary says so (exit 0). A damaged log (a record that does not
+/// decode, a CRC that does not match) is read up to the damage, and the summary of what
+/// was read is printed, then an error naming the offset (exit 1); so is a file that is not
+/// a ricochet log.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.json {
         let bytes = std::fs::read(&args.file)
@@ -43,7 +46,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let log = ricochet::log::read(&args.file)
         .with_context(|| format!("cannot inspect {}", args.file.display()))?;
-    print!("{}", report(&log, &args.file.display().to_string()));
+    crate::output::print(&report(&log, &args.file.display().to_string()))?;
+    if let Ending::Damaged { offset, error } = &log.ending {
+        anyhow::bail!(
+            "{} is damaged at byte {offset}: {error} (the summary above stops there)",
+            args.file.display()
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -78,6 +87,13 @@ fn header(out: &mut String, log: &RunLog, file: &str) {
                 out,
                 "  truncated after byte {offset} ({error}): the process writing it stopped \
                  early; everything before was read (`ricochet repair` makes it a finished file)"
+            );
+        }
+        Ending::Damaged { offset, error } => {
+            let _ = writeln!(
+                out,
+                "  DAMAGED at byte {offset} ({error}): everything before was read \
+                 (`ricochet repair` copies the records that are whole)"
             );
         }
     }

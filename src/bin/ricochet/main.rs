@@ -11,6 +11,7 @@ mod golden;
 mod impact;
 mod inspect;
 mod live;
+mod output;
 mod regions;
 mod repair;
 mod run;
@@ -39,6 +40,9 @@ enum Command {
     /// a second one exits at once.
     Run(run::Args),
     /// Print the scene, settings, impact ledger and energy audit of a run's MCAP log.
+    ///
+    /// Exit status: 0 for a complete log or one cut short (read as far as it goes), 1 for a
+    /// damaged log (what was read is printed, then the error) or a file that is not a log.
     Inspect(inspect::Args),
     /// Compare two runs (logs, summaries or golden files): impacts, energies, states.
     ///
@@ -53,6 +57,12 @@ enum Command {
     Repair(repair::Args),
     /// Run a scene over a grid of parameters in parallel (one CSV row per run), one shard
     /// of it, or merge the shards.
+    ///
+    /// Exit status: 0 when every run reached its end time; 1 when a run failed (the table
+    /// is written, its rows say why) or the sweep or merge could not be done (nothing is
+    /// written); 130 when interrupted by Ctrl-C (SIGINT), 143 by SIGTERM, 129 by SIGHUP:
+    /// the runs under way stop, and the table of the runs that finished is written, marked
+    /// incomplete (`--merge` refuses it). A second signal exits at once.
     Sweep(sweep::Args),
     /// Draw maps (SVG) of the collision type and the sign of ΔE over the (α, μ) plane, for each law.
     Regions(regions::Args),
@@ -77,7 +87,10 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            // The chain of causes, each said once (layers that print their cause and
+            // also return it as their source would repeat it).
+            let messages = err.chain().map(ToString::to_string);
+            eprintln!("error: {}", ricochet::sim::describe_messages(messages));
             ExitCode::FAILURE
         }
     }

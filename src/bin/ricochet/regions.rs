@@ -86,7 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let map = RegionMap::compute(&spec)?;
         let path = args.out_dir.join(format!("{stem}_{law}.svg"));
         regions::write_svg(&path, &map, &markers)?;
-        println!("{}", path.display());
+        crate::output::print(&format!("{}\n", path.display()))?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -90,9 +90,42 @@ struct Terminal<W: Write + Seek + Send + 'static> {
     log: RunLogger<W>,
     progress: Option<ProgressBar>,
     t_end: Real,
-    rows: Vec<Row>,
+    rows: Table,
     /// The run summary and the drift check.
     collector: Collector,
+}
+
+/// The rows of the impact table that are printed: the first and the last
+/// [`TABLE_ROWS`]` / 2` (a long run's memory must not grow with its impacts).
+#[derive(Default)]
+struct Table {
+    /// The first rows.
+    head: Vec<Row>,
+    /// The last rows, after the head.
+    tail: std::collections::VecDeque<Row>,
+    /// All the impacts seen.
+    count: usize,
+}
+
+impl Table {
+    fn push(&mut self, row: Row) {
+        self.count += 1;
+        if self.head.len() < TABLE_ROWS / 2 {
+            self.head.push(row);
+        } else {
+            if self.tail.len() == TABLE_ROWS / 2 {
+                self.tail.pop_front();
+            }
+            self.tail.push_back(row);
+        }
+    }
+
+    /// The rows kept, with their index among all the impacts.
+    fn rows(&self) -> impl Iterator<Item = (usize, &Row)> {
+        let tail_start = self.count - self.tail.len();
+        (self.head.iter().enumerate())
+            .chain((self.tail.iter().enumerate()).map(move |(k, r)| (tail_start + k, r)))
+    }
 }
 
 impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
@@ -176,11 +209,14 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 .with_context(|| format!("cannot create the summary {}", path.display()))
         })
         .transpose()?;
-    let writer = LogWriter::create(&output, LogOptions::default()).inspect_err(|_| {
-        if let Some(path) = &args.summary {
-            let _ = std::fs::remove_file(path);
-        }
-    })?;
+    let cannot_write = || format!("cannot write the log {}", output.display());
+    let writer = LogWriter::create(&output, LogOptions::default())
+        .inspect_err(|_| {
+            if let Some(path) = &args.summary {
+                let _ = std::fs::remove_file(path);
+            }
+        })
+        .with_context(cannot_write)?;
     let log = RunLogger::new(
         writer,
         &scene.model,
@@ -188,7 +224,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         (&scene.settings, &overrides),
         &scene.initial,
         gap_tol,
-    )?;
+    )
+    .with_context(cannot_write)?;
     let log = match live {
         Some(tap) => log.with_tap(tap),
         None => log,
@@ -207,7 +244,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         log,
         progress,
         t_end: scene.settings.t_end,
-        rows: Vec::new(),
+        rows: Table::default(),
         collector: Collector::new(&scene.model, &scene.settings, args.checkpoints),
     };
 
@@ -222,10 +259,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         bar.finish_and_clear();
     }
     let rows = std::mem::take(&mut terminal.rows);
-    terminal
-        .log
-        .finish(&summary)
-        .with_context(|| format!("cannot finish the log {}", output.display()))?;
+    let finished = terminal.log.finish(&summary);
 
     let document = (terminal.collector).finish(&scene, (&scene.settings, &overrides), &summary);
     if let (Some(mut file), Some(path)) = (summary_file, &args.summary) {
@@ -235,9 +269,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("cannot write the summary {}", path.display()))?;
     }
     let drift = document.drift;
+    // The report, even when the log could not be finished (a full disk: the report says
+    // when the run stopped, the error why the log is incomplete).
     let printed = report(&scene.name, &output, (&summary, drift), &rows, args.quiet);
+    finished.with_context(|| format!("cannot finish the log {}", output.display()))?;
     let signal = signal.load(Ordering::SeqCst);
-    match printed {
+    match crate::output::unless_closed(printed) {
         // After SIGHUP the terminal is gone: the log is finished, the report is not needed.
         Err(_) if signal == SIGHUP => {}
         printed => printed?,
@@ -279,9 +316,9 @@ enum Runner<'m> {
 
 /// The signal numbers of SIGINT (Ctrl-C), SIGTERM (`kill`, a service manager stopping the
 /// run) and SIGHUP (the terminal closed), which stop a run; POSIX fixes them.
-const SIGINT: usize = 2;
-const SIGTERM: usize = 15;
-const SIGHUP: usize = 1;
+pub(crate) const SIGINT: usize = 2;
+pub(crate) const SIGTERM: usize = 15;
+pub(crate) const SIGHUP: usize = 1;
 #[cfg(unix)]
 const _: () = assert!(
     SIGINT as i32 == signal_hook::consts::SIGINT
@@ -291,7 +328,7 @@ const _: () = assert!(
 
 /// The exit status of a run stopped by `signal` (0 if none was recorded): 128 + its number,
 /// the shell's convention (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP).
-fn interrupted_status(signal: usize) -> u8 {
+pub(crate) fn interrupted_status(signal: usize) -> u8 {
     let signal = if signal == 0 { SIGINT } else { signal };
     u8::try_from(128 + signal).unwrap_or(130)
 }
@@ -299,7 +336,10 @@ fn interrupted_status(signal: usize) -> u8 {
 /// On a first SIGINT (Ctrl-C), SIGTERM or SIGHUP the run stops at its next step and
 /// finishes its log, and `signal` records which came; a second one (of any of the three)
 /// ends the process at once, with 128 + its number.
-fn install_interrupt(flag: &Arc<AtomicBool>, signal: &Arc<AtomicUsize>) -> anyhow::Result<()> {
+pub(crate) fn install_interrupt(
+    flag: &Arc<AtomicBool>,
+    signal: &Arc<AtomicUsize>,
+) -> anyhow::Result<()> {
     #[cfg(unix)]
     {
         use signal_hook::flag;
@@ -325,18 +365,23 @@ fn report(
     name: &str,
     output: &std::path::Path,
     (summary, drift): (&RunSummary, Option<DriftCheck>),
-    rows: &[Row],
+    rows: &Table,
     quiet: bool,
-) -> anyhow::Result<()> {
+) -> std::io::Result<()> {
     let mut out = std::io::stdout().lock();
     let c = &summary.counters;
+    // The line says the time: the failure without it.
+    let stop = match &summary.stop {
+        StopReason::Failed(e) => format!("failed: {}", e.what()),
+        stop => stop.to_string(),
+    };
     writeln!(
         out,
-        "{name}: stopped at t = {:.6} s, {}\n{} impacts, {} steps ({} rejected), {} rhs evaluations",
-        summary.state.t, summary.stop, c.impacts, c.steps, c.rejected, c.rhs_evals
+        "{name}: stopped at t = {:.6} s, {stop}\n{} impacts, {} steps ({} rejected), {} rhs evaluations",
+        summary.state.t, c.impacts, c.steps, c.rejected, c.rhs_evals
     )?;
     if !quiet {
-        if !rows.is_empty() {
+        if rows.count > 0 {
             writeln!(out)?;
             writeln!(
                 out,
@@ -354,18 +399,14 @@ fn report(
                 "v_t^S [m/s]",
                 "dE [J]"
             )?;
-            for (k, r) in rows.iter().enumerate() {
-                if rows.len() > TABLE_ROWS && k == TABLE_ROWS / 2 {
+            for (k, r) in rows.rows() {
+                if rows.count > TABLE_ROWS && k == rows.count - TABLE_ROWS / 2 {
                     writeln!(
                         out,
                         "{:>5} … {} more impacts …",
                         "",
-                        rows.len() - TABLE_ROWS
+                        rows.count - TABLE_ROWS
                     )?;
-                }
-                if rows.len() > TABLE_ROWS && k >= TABLE_ROWS / 2 && k < rows.len() - TABLE_ROWS / 2
-                {
-                    continue;
                 }
                 writeln!(
                     out,
@@ -445,7 +486,7 @@ fn report(
         writeln!(out, "drift budget: {}", d.describe())?;
     }
     writeln!(out, "log: {}", output.display())?;
-    Ok(())
+    out.flush()
 }
 
 /// `x` in at most 9 characters: fixed below 10⁴, scientific above (α is unbounded as the

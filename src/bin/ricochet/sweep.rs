@@ -7,6 +7,8 @@ use std::io::{BufReader, BufWriter, IsTerminal, Write};
 use std::num::NonZeroUsize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -14,6 +16,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ricochet::sweep::{
     Grid, ParamSpec, Shard, Sweep, Table, merge, read_table, thread_pool, write_table,
 };
+
+use crate::run::{SIGHUP, SIGTERM, install_interrupt, interrupted_status};
 
 /// Options of `ricochet sweep`.
 #[derive(clap::Args)]
@@ -86,17 +90,36 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     });
     let pool = thread_pool(args.threads)?;
     let threads = pool.current_num_threads();
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let signal = Arc::new(AtomicUsize::new(0));
+    install_interrupt(&interrupt, &signal)?;
     let start = Instant::now();
-    let rows = sweep.run_in(&pool, shard, &|_| {
-        if let Some(bar) = &progress {
-            bar.inc(1);
-        }
-    });
+    let rows = sweep.run_until(
+        &pool,
+        shard,
+        &|_| {
+            if let Some(bar) = &progress {
+                bar.inc(1);
+            }
+        },
+        Some(&interrupt),
+    );
     if let Some(bar) = &progress {
         bar.finish_and_clear();
     }
     let elapsed = start.elapsed().as_secs_f64();
-    write_atomically(&output, |w| Ok(sweep.write_table(w, shard, &rows)?))?;
+    // Interrupted: the rows of the runs that finished, the table marked incomplete.
+    let mut header = sweep.header(shard);
+    let signal = signal.load(Ordering::SeqCst);
+    let interrupted = interrupt.load(Ordering::SeqCst) && rows.len() < runs;
+    if interrupted {
+        header.incomplete = Some(format!(
+            "{} of {runs} runs finished: interrupted by {}",
+            rows.len(),
+            signal_name(signal)
+        ));
+    }
+    write_atomically(&output, |w| Ok(sweep.write_table_under(w, &header, &rows)?))?;
 
     // What stopped the runs, in a fixed order.
     let mut stops: Vec<(&str, usize)> = Vec::new();
@@ -112,9 +135,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         1 => "1 thread".to_owned(),
         n => format!("{n} threads"),
     };
-    println!(
-        "{}: {runs} of {} runs (shard {shard}) on {threads} in {elapsed:.2} s; stops: {}\nwrote {}",
+    crate::output::print(&format!(
+        "{}: {} of {} runs (shard {shard}) on {threads} in {elapsed:.2} s; stops: {}\nwrote {}\n",
         scene.name,
+        rows.len(),
         sweep.grid().len(),
         if stops.is_empty() {
             "none".to_owned()
@@ -122,17 +146,36 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             stops.join(", ")
         },
         output.display()
-    );
-    let failed = rows
-        .iter()
-        .filter(|r| matches!(r.stop(), "error" | "panic"))
-        .count();
+    ))?;
+    if let Some(why) = &header.incomplete {
+        eprintln!(
+            "{}: {why}; the table holds those runs and is marked incomplete (`--merge` \
+             refuses it: run the shard again)",
+            output.display()
+        );
+        return Ok(ExitCode::from(interrupted_status(signal)));
+    }
+    let failed = rows.iter().filter(|r| r.stop() != END_TIME).count();
     if failed > 0 {
         eprintln!(
-            "warning: {failed} runs failed (stop = error or panic); their rows say why (stop_detail)"
+            "{failed} of {} runs failed (stop = error or panic): their rows say why (stop_detail)",
+            rows.len()
         );
+        return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The stop of a run that reached its end time ([`StopReason::name`](ricochet::sim::StopReason::name)).
+const END_TIME: &str = "t_end";
+
+/// The name of the signal `number` that interrupted a sweep.
+fn signal_name(number: usize) -> &'static str {
+    match number {
+        SIGTERM => "SIGTERM",
+        SIGHUP => "SIGHUP",
+        _ => "SIGINT (Ctrl-C)",
+    }
 }
 
 /// `ricochet sweep --merge SHARD… [-o OUT]`.
@@ -150,13 +193,13 @@ fn merge_shards(inputs: &[PathBuf], output: Option<PathBuf>) -> anyhow::Result<E
         bail!("the output {} is one of the shards", p.display());
     }
     write_atomically(&output, |w| Ok(write_table(w, &header, &columns, &rows)?))?;
-    println!(
-        "{}: merged {} shards, {} runs\nwrote {}",
+    crate::output::print(&format!(
+        "{}: merged {} shards, {} runs\nwrote {}\n",
         header.scene,
         inputs.len(),
         rows.len(),
         output.display()
-    );
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -1,6 +1,16 @@
 //! Reading an MCAP file linearly, as far as it goes: its top-level records with `mcap`'s
 //! reader, the records of its complete chunks with `mcap`'s decompressors, and those of
-//! the chunk at which reading stops (cut short or damaged) as far as they decode.
+//! the chunk at which reading stops (cut short or damaged) as far as they decode. Shared
+//! by [`repair`](super::repair) and [`read`](crate::log::read) (`ricochet inspect`).
+//!
+//! The file is untrusted: no allocation is sized from one of its length fields beyond what
+//! the bytes present can hold. `mcap`'s readers are given a record length limit (the
+//! input's size; for the records of a chunk, its uncompressed size clamped to what its
+//! compressed bytes can expand to), and every record is checked field by field
+//! ([`check_layout`]) before `mcap`'s parser sees it, which reserves a string's length
+//! field (up to 4 GiB) before reading the string. The CRCs of the chunks, of the data
+//! section and of the summary section are checked, so that a damaged byte anywhere is
+//! reported.
 
 use std::ops::ControlFlow;
 
@@ -12,20 +22,20 @@ use super::{InputEnd, RECORD_PREFIX, lz4};
 use crate::log::LogError;
 
 /// Where and why the reading of an input stopped.
-pub(super) struct Scanned {
+pub(in crate::log) struct Scanned {
     /// The input's header record.
-    pub(super) header: records::Header,
+    pub(in crate::log) header: records::Header,
     /// How the input ends.
-    pub(super) end: InputEnd,
+    pub(in crate::log) end: InputEnd,
     /// See [`RepairReport::stopped_at`](super::RepairReport::stopped_at).
-    pub(super) stopped_at: u64,
+    pub(in crate::log) stopped_at: u64,
 }
 
 /// Reads `input` from its start and hands every record to keep (schema, channel, message,
 /// metadata, attachment) to `visit`, in file order, the records of a chunk in their order
 /// in it; the flag is `true` for those salvaged from the chunk at which reading stopped.
 /// Returns the header and where and why reading stopped.
-pub(super) fn scan(
+pub(in crate::log) fn scan(
     input: &[u8],
     visit: &mut dyn FnMut(Record<'_>, bool) -> Result<(), LogError>,
 ) -> Result<Scanned, LogError> {
@@ -39,6 +49,8 @@ pub(super) fn scan(
     let reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
             .with_emit_chunks(true)
+            .with_validate_data_section_crc(true)
+            .with_validate_summary_section_crc(true)
             .with_record_length_limit(input.len()),
     );
     let mut reading = Reading {
@@ -106,8 +118,7 @@ impl Reading<'_> {
             return ControlFlow::Continue(());
         }
         if self.header.is_none() {
-            // (The opcode first: mcap's parser can panic on a short attachment record.)
-            let header = (opcode == op::HEADER).then(|| mcap::parse_record(opcode, body));
+            let header = (opcode == op::HEADER).then(|| parse(opcode, body));
             return match header {
                 Some(Ok(Record::Header(h))) => {
                     self.header = Some(h);
@@ -178,9 +189,26 @@ fn why_stopped(input: &[u8], offset: usize, error: &McapError) -> InputEnd {
             InputEnd::InsideRecord { opcode }
         }
         (Some(_), Some(_)) => InputEnd::Unreadable {
-            error: error.to_string(),
+            error: match error {
+                McapError::BadDataCrc { .. } => format!(
+                    "{error}: a byte of the data section before this record (the data end) \
+                     was damaged"
+                ),
+                _ => describe(error),
+            },
         },
     }
+}
+
+/// `error` with its causes (mcap's "Record parse failed" hides binrw's message).
+fn describe(error: &McapError) -> String {
+    let mut text = error.to_string();
+    let mut source = std::error::Error::source(error);
+    while let Some(cause) = source {
+        text = format!("{text}: {cause}");
+        source = cause.source();
+    }
+    text
 }
 
 /// The body length of the record starting `bytes`, if its prefix is whole.
@@ -234,43 +262,79 @@ fn each_record<B>(
 fn kept(opcode: u8, body: &[u8]) -> Result<Option<Record<'_>>, String> {
     match opcode {
         0 => Err("opcode 0x00 (zeroed bytes?)".to_owned()),
-        op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA => mcap::parse_record(opcode, body)
-            .map(Some)
-            .map_err(|e| e.to_string()),
-        op::ATTACHMENT => {
-            // mcap's parser slices `body[header..len − 4]` before checking that the CRC
-            // is there: check it first.
-            if !attachment_header_fits(body) {
-                return Err("attachment record too short".to_owned());
-            }
-            mcap::parse_record(opcode, body)
-                .map(Some)
-                .map_err(|e| e.to_string())
+        op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA | op::ATTACHMENT => {
+            parse(opcode, body).map(Some)
         }
         _ => Ok(None),
     }
 }
 
-/// Whether an attachment body holds its header fields and a CRC after them [MCAP,
-/// §Attachment]: log time, create time, name, media type, data length, …, CRC.
-fn attachment_header_fits(body: &[u8]) -> bool {
-    let after_header = || -> Option<usize> {
-        let mut r = Bytes(body);
-        r.take(16)?;
-        let name = r.u32()?;
-        r.take(usize::try_from(name).ok()?)?;
-        let media_type = r.u32()?;
-        r.take(usize::try_from(media_type).ok()?)?;
-        r.u64()?;
-        Some(r.0.len())
+/// The record `opcode`/`body` parsed by `mcap`, once [`check_layout`] has found its length
+/// fields within it.
+fn parse(opcode: u8, body: &[u8]) -> Result<Record<'_>, String> {
+    check_layout(opcode, body)?;
+    mcap::parse_record(opcode, body).map_err(|e| describe(&e))
+}
+
+/// Checks that every length field of a header, schema, channel, message, metadata or
+/// attachment record (`body`: after its opcode and length) lies within the record, as the
+/// fields are laid out [MCAP, §Records]: `mcap`'s parser reserves a string's length (a
+/// `u32`) before reading it (a damaged length asked for up to 4 GiB per string), and
+/// slices an attachment's body before checking that its CRC is there (a panic).
+///
+/// ```text
+/// header      profile: string, library: string
+/// schema      id: u16, name: string, encoding: string, data: u32 length + bytes
+/// channel     id: u16, schema_id: u16, topic: string, message_encoding: string,
+///             metadata: map<string, string>
+/// message     channel_id: u16, sequence: u32, log_time: u64, publish_time: u64, data
+/// metadata    name: string, metadata: map<string, string>
+/// attachment  log_time: u64, create_time: u64, name: string, media_type: string,
+///             data: u64 length + bytes, crc: u32
+/// ```
+/// (A string is a `u32` length and that many bytes; a map a `u32` length in bytes and its
+/// entries.) Other kinds are not checked: `mcap` parses them only on request.
+fn check_layout(opcode: u8, body: &[u8]) -> Result<(), String> {
+    let mut r = Bytes(body);
+    let fits = match opcode {
+        op::HEADER => r.string().and_then(|_| r.string()),
+        op::SCHEMA => (r.take(2))
+            .and_then(|_| r.string())
+            .and_then(|_| r.string())
+            .and_then(|_| r.string()),
+        op::CHANNEL => (r.take(4))
+            .and_then(|_| r.string())
+            .and_then(|_| r.string())
+            .and_then(|_| r.string_map()),
+        op::MESSAGE => r.take(2 + 4 + 8 + 8),
+        op::METADATA => r.string().and_then(|_| r.string_map()),
+        op::ATTACHMENT => (r.take(16))
+            .and_then(|_| r.string())
+            .and_then(|_| r.string())
+            .and_then(|_| r.u64())
+            .and_then(|n| r.take(usize::try_from(n).ok()?))
+            .and_then(|_| r.take(4)),
+        _ => Some(&[][..]),
     };
-    after_header().is_some_and(|rest| rest >= 4)
+    match fits {
+        Some(_) => Ok(()),
+        None => Err(format!(
+            "{} record too short: a length field runs past its end ({} bytes)",
+            super::record_name(opcode),
+            body.len()
+        )),
+    }
 }
 
 /// The records to keep of the complete chunk record `record` (opcode to end), decompressed
 /// by `mcap` and checked against the chunk's CRC; an error if any of it does not decode.
 fn chunk_records(record: &[u8]) -> Result<Vec<Record<'static>>, String> {
-    let options = LinearReaderOptions::default().with_validate_chunk_crcs(true);
+    let Some(chunk) = ChunkStart::parse(record) else {
+        return Err("chunk header cut short".to_owned());
+    };
+    let options = LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(chunk.records_limit(record.len()));
     match records_in(record, options) {
         (records, None) => Ok(records),
         (_, Some(error)) => Err(error),
@@ -289,22 +353,27 @@ fn salvage(record: &[u8]) -> Vec<Record<'static>> {
     } else {
         // Uncompressed chunks, and zstd ones with the `zstd` feature: mcap's streaming
         // reader yields each record as soon as its bytes are there.
-        records_in(&chunk.reframed(), LinearReaderOptions::default()).0
+        let reframed = chunk.reframed();
+        let limit = chunk.records_limit(reframed.len());
+        let options = LinearReaderOptions::default().with_record_length_limit(limit);
+        records_in(&reframed, options).0
     }
 }
 
 /// The records to keep among the records of `bytes` (no magic, e.g. one chunk record, or
-/// the records of a decompressed chunk), read with `options`, up to the first that cannot
-/// be read, and why it could not.
+/// the records of a decompressed chunk), read with `options` (the record length limit
+/// defaults to the length of `bytes`), up to the first that cannot be read, and why it
+/// could not.
 fn records_in(
     bytes: &[u8],
     options: LinearReaderOptions,
 ) -> (Vec<Record<'static>>, Option<String>) {
+    let limit = options.record_length_limit.unwrap_or(bytes.len());
     let reader = LinearReader::new_with_options(
         options
             .with_skip_start_magic(true)
             .with_skip_end_magic(true)
-            .with_record_length_limit(decompressed_limit(bytes.len())),
+            .with_record_length_limit(limit),
     );
     let mut records = Vec::new();
     let fed = each_record(reader, bytes, |opcode, body| match kept(opcode, body) {
@@ -317,16 +386,16 @@ fn records_in(
     let error = match fed {
         Fed::Done => None,
         Fed::Stopped(error) => Some(error),
-        Fed::Failed(e) => Some(e.to_string()),
+        Fed::Failed(e) => Some(describe(&e)),
     };
     (records, error)
 }
 
-/// The most that `compressed` bytes may decompress to: 256 times as much (LZ4's largest
-/// ratio is 255), at least 64 MiB, so that a damaged length cannot ask for an absurd
-/// allocation.
+/// The most that `compressed` bytes of LZ4 may decompress to: 256 times as much (LZ4's
+/// largest ratio is 255) and 64 KiB (a frame's header and a block), so that a damaged length
+/// cannot ask for an absurd allocation.
 fn decompressed_limit(compressed: usize) -> usize {
-    compressed.saturating_mul(256).max(64 << 20)
+    compressed.saturating_mul(256).saturating_add(64 << 10)
 }
 
 /// The start of a chunk record [MCAP, §Chunk]: its header and its compressed records as
@@ -334,6 +403,8 @@ fn decompressed_limit(compressed: usize) -> usize {
 struct ChunkStart<'a> {
     /// The record up to its compressed records: opcode, length, header fields.
     head: &'a [u8],
+    /// The size of its records decompressed, as the header says (bytes).
+    uncompressed_size: u64,
     /// The compression, e.g. `lz4`; empty if none.
     compression: &'a [u8],
     /// The compressed records, cut where the bytes end.
@@ -346,7 +417,9 @@ impl<'a> ChunkStart<'a> {
         let mut r = Bytes(record);
         r.take(RECORD_PREFIX)?;
         // message_start_time, message_end_time, uncompressed_size, uncompressed_crc.
-        r.take(8 + 8 + 8 + 4)?;
+        r.take(8 + 8)?;
+        let uncompressed_size = r.u64()?;
+        r.take(4)?;
         let n = r.u32()?;
         let compression = r.take(usize::try_from(n).ok()?)?;
         let compressed_size = r.u64()?;
@@ -354,9 +427,26 @@ impl<'a> ChunkStart<'a> {
         let records = r.take_up_to(usize::try_from(compressed_size).unwrap_or(usize::MAX));
         Some(ChunkStart {
             head,
+            uncompressed_size,
             compression,
             records,
         })
+    }
+
+    /// The record length limit of `mcap`'s reader for this chunk, whose record is `len`
+    /// bytes long: the uncompressed size of its header, at least `len` (the reader buffers
+    /// compressed bytes up to the limit) and at most what `len` bytes can expand to
+    /// (LZ4: [`decompressed_limit`]; zstd, which can expand further: 64 MiB more), so that
+    /// no damaged length asks for more.
+    fn records_limit(&self, len: usize) -> usize {
+        let most = match self.compression {
+            b"" => len,
+            b"lz4" => decompressed_limit(len),
+            _ => decompressed_limit(len).saturating_add(64 << 20),
+        };
+        usize::try_from(self.uncompressed_size)
+            .unwrap_or(usize::MAX)
+            .clamp(len, most)
     }
 
     /// The chunk record holding only the compressed records that are there: its length
@@ -405,6 +495,23 @@ impl<'a> Bytes<'a> {
     }
     pub(super) fn u64(&mut self) -> Option<u64> {
         self.array().map(u64::from_le_bytes)
+    }
+    /// A string [MCAP, §Serialization]: a `u32` length and that many bytes.
+    fn string(&mut self) -> Option<&'a [u8]> {
+        let n = self.u32()?;
+        self.take(usize::try_from(n).ok()?)
+    }
+    /// A map of strings to strings: a `u32` length in bytes, then that many bytes of
+    /// key–value pairs, each string within them.
+    fn string_map(&mut self) -> Option<&'a [u8]> {
+        let n = self.u32()?;
+        let map = self.take(usize::try_from(n).ok()?)?;
+        let mut entries = Bytes(map);
+        while !entries.0.is_empty() {
+            entries.string()?;
+            entries.string()?;
+        }
+        Some(map)
     }
 }
 

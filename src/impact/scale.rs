@@ -1,0 +1,258 @@
+//! The scale invariance of the impact laws, used to solve every problem at order one.
+//!
+//! The laws are homogeneous: if `(I, v^S)` solves `(W, v^A, e, μ)`, then for `s, c > 0`
+//! `((c/s) I, c v^S)` solves `(s W, c v^A, e, μ)`. Eqs. (22)–(23), `v^S − v^A = W I`,
+//! hold with `c v^S − c v^A = (s W)((c/s) I)`; Coulomb's cone and the directions of the
+//! phases of Routh's path (`dI_t = ∓μ dI_n`, `dI_t = −(m_nt/m_tt) dI_n`) are linear in
+//! `I` and unchanged by `W → s W`; Newton's end condition `v_n^S = −e v_n^A` is linear in
+//! the velocities, Poisson's `I_n = (1 + e) I_c` in the impulses, and Stronge's works
+//! `∫ v_n dI_n` scale by `c · c/s` on both sides of `W_r = −e² W_c`. Hence:
+//!
+//! | quantity | scales by |
+//! |---|---|
+//! | `I_n`, `I_t` (and along the phases) | `c/s` |
+//! | `v^S`, the velocities along the phases | `c` |
+//! | `ΔE` [P, Eq. (29)], `work_n`, `work_t` | `c²/s` |
+//! | g, h, p, q [P, Eq. (35)] | `s` |
+//! | `Δ` [P, Eq. (24)] | `s²` |
+//! | α, r_m, r_p, the type, the sign case | 1 |
+//!
+//! [`solve`](super::solve) divides `W` by `s = 2^a` and `v^A` by `c = 2^b`, the powers of
+//! two at or below their largest entries, solves that problem of order one, and scales the
+//! answer back. Products by powers of two are exact in binary floating point, so where
+//! nothing over- or underflows the answer is bit for bit what the unscaled formulas give;
+//! elsewhere (`Δ` overflowed beyond `|W| ≈ 1e154`, `V²` underflowed below `|v| ≈ 1e-154`)
+//! it is the answer the formulas would give in exact arithmetic, rounded once (results in
+//! the subnormal range, below 2.2e-308, keep fewer digits). An answer beyond the range of
+//! doubles, or an impulse `I_n > 0` that rounds to 0, is an error
+//! ([`ImpactError::OutOfRange`]).
+
+use super::coefficients::Coefficients;
+use super::outcome::Outcome;
+use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem};
+use crate::math::Real;
+
+/// The powers of two `s = 2^w` and `c = 2^v` of a problem's `W` and `v^A`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Scale {
+    /// `log2 s`.
+    w: i32,
+    /// `log2 c`.
+    v: i32,
+}
+
+impl Scale {
+    /// The scales of `W` and `v^A`: the powers of two at or below their largest entries
+    /// (both nonzero for valid data: `m_nn > 0`, `v_n^A < 0`).
+    pub(super) fn of(w: &ImpactMatrix, v_a: ContactVelocity) -> Self {
+        Self {
+            w: exponent(w.nn.abs().max(w.nt.abs()).max(w.tt.abs())),
+            v: exponent(v_a.n.abs().max(v_a.t.abs())),
+        }
+    }
+
+    /// `W / s`, whose largest entry lies in `[1, 2)`.
+    pub(super) fn matrix_down(&self, w: &ImpactMatrix) -> ImpactMatrix {
+        ImpactMatrix::new(
+            ldexp(w.nn, -self.w),
+            ldexp(w.nt, -self.w),
+            ldexp(w.tt, -self.w),
+        )
+    }
+
+    /// The problem `(W/s, v^A/c, e, μ)`.
+    pub(super) fn down(&self, pb: &ImpactProblem) -> ImpactProblem {
+        ImpactProblem {
+            w: self.matrix_down(&pb.w),
+            v_a: ContactVelocity::new(ldexp(pb.v_a.n, -self.v), ldexp(pb.v_a.t, -self.v)),
+            ..*pb
+        }
+    }
+
+    /// Why the problem `unit = self.down(original)` is beyond the precision of doubles,
+    /// if it is: an entry of `W` or `v^A` that lost digits when brought to order one (it
+    /// is more than 2^1022 times smaller than the largest of its kind), or a coefficient
+    /// g, h, p, q beyond 1e150 (a large `μ`), whose products with another overflow.
+    pub(super) fn out_of_scale(
+        &self,
+        original: &ImpactProblem,
+        unit: &ImpactProblem,
+    ) -> Option<String> {
+        let (w, v) = (&original.w, original.v_a);
+        let entries = [
+            ("m_nn", w.nn, unit.w.nn, self.w),
+            ("m_nt", w.nt, unit.w.nt, self.w),
+            ("m_tt", w.tt, unit.w.tt, self.w),
+            ("v_n^A", v.n, unit.v_a.n, self.v),
+            ("v_t^A", v.t, unit.v_a.t, self.v),
+        ];
+        if let Some((what, x, _, _)) = (entries.iter()).find(|&&(_, x, u, k)| ldexp(u, k) != x) {
+            let (of, largest) = if what.starts_with('m') {
+                ("W", ldexp(1.0, self.w))
+            } else {
+                ("v^A", ldexp(1.0, self.v))
+            };
+            return Some(format!(
+                "{what} = {x:e} is too small against the largest entry of {of} (about {largest:e}) \
+                 to keep its digits"
+            ));
+        }
+        let c = Coefficients::new(&unit.w, unit.mu, unit.v_a);
+        let largest = c.g.abs().max(c.h.abs()).max(c.p.abs()).max(c.q.abs());
+        (largest > 1e150).then(|| {
+            format!(
+                "μ = {:e} makes g, h, p, q as large as {largest:e} against W, and their products \
+                 overflow",
+                original.mu
+            )
+        })
+    }
+
+    /// The powers of two of an impulse, a velocity, a work, a coefficient g, h, p, q and
+    /// `Δ`, in this order (see the module's table).
+    pub(super) fn exponents(&self) -> Exponents {
+        Exponents {
+            impulse: self.v - self.w,
+            velocity: self.v,
+            work: 2 * self.v - self.w,
+            coefficient: self.w,
+            det: 2 * self.w,
+        }
+    }
+
+    /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
+    /// caller's scales; an error if a number of it is beyond the range of doubles.
+    pub(super) fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
+        let k = self.exponents();
+        // Checked at order one: which number leaves the range, and by how much.
+        if let Some((what, x, e)) = beyond_range(&out, &k) {
+            return Err(ImpactError::OutOfRange {
+                what,
+                log10: x.abs().log10() + Real::from(e) * std::f64::consts::LOG10_2,
+            });
+        }
+        out.impulse.n = ldexp(out.impulse.n, k.impulse);
+        out.impulse.t = ldexp(out.impulse.t, k.impulse);
+        out.v_s = ContactVelocity::new(ldexp(out.v_s.n, k.velocity), ldexp(out.v_s.t, k.velocity));
+        out.delta_e = ldexp(out.delta_e, k.work);
+        out.work_n = ldexp(out.work_n, k.work);
+        out.work_t = ldexp(out.work_t, k.work);
+        out.coefficients = out.coefficients.scaled(&k);
+        out.phases = out.phases.scaled(&k);
+        Ok(out)
+    }
+}
+
+/// The powers of two by which each kind of quantity scales (see [`Scale::exponents`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Exponents {
+    /// Impulses: `c/s`.
+    pub(super) impulse: i32,
+    /// Velocities: `c`.
+    pub(super) velocity: i32,
+    /// Works and energies: `c²/s`.
+    pub(super) work: i32,
+    /// g, h, p, q: `s`.
+    pub(super) coefficient: i32,
+    /// `Δ`: `s²`.
+    pub(super) det: i32,
+}
+
+/// The first number of an outcome at order one that the powers of two `k` take beyond
+/// the range of doubles (infinite), or `I_n > 0` that they bring to 0, with its name, its
+/// value at order one and its power of two. (`Δ`, which no answer reports, may overflow
+/// for `|W|` beyond 1e154 and is not checked; the velocities scale as `v^A` and cannot.)
+fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32)> {
+    let c = &out.coefficients;
+    let numbers = [
+        ("I_n", out.impulse.n, k.impulse),
+        ("I_t", out.impulse.t, k.impulse),
+        ("ΔE", out.delta_e, k.work),
+        ("work_n", out.work_n, k.work),
+        ("work_t", out.work_t, k.work),
+        ("g", c.g, k.coefficient),
+        ("h", c.h, k.coefficient),
+        ("p", c.p, k.coefficient),
+        ("q", c.q, k.coefficient),
+    ];
+    let phases = out.phases.iter().flat_map(|ph| {
+        let end = ph.end;
+        [
+            ("I_n at the end of a phase", end.i.n, k.impulse),
+            ("I_t at the end of a phase", end.i.t, k.impulse),
+            ("work_n at the end of a phase", end.work_n, k.work),
+            ("work_t at the end of a phase", end.work_t, k.work),
+        ]
+    });
+    let overflow = (numbers.into_iter().chain(phases)).find(|&(_, x, e)| !ldexp(x, e).is_finite());
+    let underflow = || {
+        let i_n = out.impulse.n;
+        (i_n > 0.0 && ldexp(i_n, k.impulse) == 0.0).then_some(("I_n", i_n, k.impulse))
+    };
+    overflow.or_else(underflow)
+}
+
+/// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
+/// for 0 and non-finite `x`.
+pub(crate) fn exponent(x: Real) -> i32 {
+    if x == 0.0 || !x.is_finite() {
+        return 0;
+    }
+    let biased = ((x.to_bits() >> 52) & 0x7FF) as i32;
+    if biased == 0 {
+        // Subnormal: bring it into the normal range first (exact).
+        exponent(x * pow2(64)) - 64
+    } else {
+        biased - 1023
+    }
+}
+
+/// `x · 2^k`, exact unless the result is subnormal (then rounded, at most twice) or beyond
+/// the range of doubles (then infinite).
+pub(crate) fn ldexp(mut x: Real, mut k: i32) -> Real {
+    while k > 1023 {
+        x *= pow2(1023);
+        k -= 1023;
+    }
+    while k < -1022 {
+        x *= pow2(-1022);
+        k += 1022;
+    }
+    x * pow2(k)
+}
+
+/// `2^k` for `k ∈ [−1022, 1023]`, from its bits.
+fn pow2(k: i32) -> Real {
+    debug_assert!((-1022..=1023).contains(&k));
+    Real::from_bits(((k + 1023) as u64) << 52)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exponent_and_ldexp_are_exact() {
+        for (x, k) in [
+            (1.0, 0),
+            (1.5, 0),
+            (2.0, 1),
+            (0.75, -1),
+            (Real::MAX, 1023),
+            (Real::MIN_POSITIVE, -1022),
+            (5e-324, -1074),
+            (-3e-310, -1029),
+        ] {
+            assert_eq!(exponent(x), k, "{x}");
+            let m = ldexp(x, -k);
+            assert!((1.0..2.0).contains(&m.abs()), "{x} → {m}");
+            assert_eq!(ldexp(m, k), x, "{x}");
+        }
+        assert_eq!(ldexp(1.0, 1024), Real::INFINITY);
+        assert_eq!(ldexp(1.0, -1074), 5e-324);
+        assert_eq!(ldexp(1.0, -1076), 0.0);
+        assert_eq!(ldexp(1.5, -2000), 0.0);
+        assert_eq!(ldexp(1.5, 2000), Real::INFINITY);
+        assert_eq!(ldexp(ldexp(1.5, 1000), -2000), ldexp(1.5, -1000));
+    }
+}

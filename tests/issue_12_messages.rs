@@ -1,0 +1,210 @@
+//! Issue 12, item 8: messages. A runtime error repeated its context three or four times
+//! (`stopped at t = 0.5 s, failed: at t = 0.5: at t = 0.5: q[0] is not finite (NaN): at
+//! t = 0.5: q[0] is not finite (NaN)`: each layer said its time and its cause's message,
+//! and the chain was printed after it); a disk that filled up during a run said "the log
+//! writer has stopped after an earlier error", not why nor which file; `ricochet run … |
+//! head -1` ended with "Broken pipe" and exit 1 although the run had completed.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use ricochet::dynamics::DynamicsError;
+use ricochet::impact::ImpactError;
+use ricochet::integrate::IntegrateError;
+use ricochet::sim::{Nested, SimError, StopReason};
+
+const BIN: &str = env!("CARGO_BIN_EXE_ricochet");
+
+fn count(text: &str, part: &str) -> usize {
+    text.matches(part).count()
+}
+
+fn non_finite(t: f64) -> SimError {
+    SimError::Dynamics {
+        t,
+        source: DynamicsError::NonFinite {
+            t,
+            what: "q",
+            index: 0,
+            value: f64::NAN,
+        },
+    }
+}
+
+#[test]
+fn a_failure_says_its_time_and_cause_once() {
+    let cases = [
+        (non_finite(0.5), "q[0] is not finite (NaN)"),
+        (
+            SimError::Integrate(IntegrateError::Rhs {
+                t: 0.5,
+                source: Nested(Box::new(non_finite(0.5))),
+            }),
+            "q[0] is not finite (NaN)",
+        ),
+        (
+            SimError::Impact {
+                t: 0.5,
+                pair: 0,
+                name: "ball/floor".to_owned(),
+                source: ImpactError::Jam { law: "newton" },
+            },
+            "the contact jams under newton",
+        ),
+    ];
+    for (error, cause) in cases {
+        let text = StopReason::Failed(error).to_string();
+        assert_eq!(count(&text, "t = 0.5"), 1, "{text}");
+        assert_eq!(count(&text, cause), 1, "{text}");
+        assert!(text.starts_with("failed: "), "{text}");
+    }
+    // Without the time, for a line that says it already.
+    let error = SimError::Integrate(IntegrateError::Rhs {
+        t: 0.5,
+        source: Nested(Box::new(non_finite(0.5))),
+    });
+    assert_eq!(error.time(), Some(0.5));
+    assert_eq!(
+        error.what(),
+        "right-hand side failed: q[0] is not finite (NaN)"
+    );
+}
+
+fn scene(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"))
+}
+
+/// Runs `sh -c script` with `$RICOCHET` and `$SCENE` set.
+fn sh(script: &str, scene_name: &str, dir: &Path) -> Output {
+    Command::new("sh")
+        .args(["-c", script])
+        .env("RICOCHET", BIN)
+        .env("SCENE", scene(scene_name))
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap()
+}
+
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("ricochet-msg-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Checks the output of a run whose log could not be written past some size: the reason
+/// of the operating system and the file, once each, and exit 1.
+fn check_log_write_failure(out: &Output, file: &str, reason: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}\n{stderr}");
+    let error = stderr
+        .lines()
+        .find(|l| l.starts_with("error: "))
+        .unwrap_or_else(|| {
+            panic!("no error line: {stderr}");
+        });
+    assert!(error.contains(reason) && error.contains(file), "{error}");
+    assert_eq!(count(&stderr, reason), 1, "{stderr}");
+    assert!(!stderr.contains("earlier error"), "{stderr}");
+}
+
+/// A file size limit (`ulimit -f`, SIGXFSZ ignored) makes the log's writes fail after
+/// 64 KiB: "File too large" and the log's name reach the user.
+#[test]
+fn a_log_that_cannot_grow_says_why_and_which_file() {
+    let dir = temp_dir("fsize");
+    let out = sh(
+        r#"trap '' XFSZ; ulimit -f 128; exec "$RICOCHET" run "$SCENE" --t-end 200 -o wheel.mcap"#,
+        "rimless_wheel",
+        &dir,
+    );
+    check_log_write_failure(&out, "wheel.mcap", "File too large");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A full disk: a 200 KiB tmpfs (needs the right to mount; skipped, and said so, without
+/// it). "No space left on device" and the log's name reach the user.
+#[test]
+fn a_full_disk_says_so() {
+    let dir = temp_dir("enospc");
+    let mount = dir.join("small");
+    std::fs::create_dir_all(&mount).unwrap();
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", "size=200k", "tmpfs"])
+        .arg(&mount)
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        println!("skipped: cannot mount a tmpfs here (the ulimit test covers the same path)");
+        return;
+    }
+    let out = sh(
+        r#"exec "$RICOCHET" run "$SCENE" --t-end 200 -o small/wheel.mcap"#,
+        "rimless_wheel",
+        &dir,
+    );
+    let _ = Command::new("umount").arg(&mount).status();
+    check_log_write_failure(&out, "small/wheel.mcap", "No space left on device");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Standard output closed before anything is printed (`| head -0`, a reader gone): the
+/// commands finish their work, print nothing more, and exit as they would have.
+#[test]
+fn a_closed_standard_output_is_not_an_error() {
+    let dir = temp_dir("pipe");
+    // As the issue has it (the status of a pipeline is that of `head`).
+    let out = sh(
+        r#""$RICOCHET" run "$SCENE" -o ball.mcap | head -1"#,
+        "bouncing_ball",
+        &dir,
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("Broken pipe") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    // The exit status of ricochet itself, its standard output a pipe closed at once.
+    for args in [
+        vec![
+            "run".to_owned(),
+            scene("bouncing_ball").display().to_string(),
+            "-o".into(),
+            "ball.mcap".into(),
+        ],
+        vec!["inspect".to_owned(), "ball.mcap".to_owned()],
+        vec![
+            "check".to_owned(),
+            scene("bouncing_ball").display().to_string(),
+        ],
+    ] {
+        let mut child = Command::new(BIN)
+            .args(&args)
+            .current_dir(&dir)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let mut stderr = String::new();
+        child
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut stderr)
+            .unwrap();
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(0), "{args:?}: {stderr}");
+        assert!(
+            !stderr.contains("Broken pipe") && !stderr.contains("panicked"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(ricochet::log::read(dir.join("ball.mcap")).is_ok());
+    let _ = std::fs::remove_dir_all(&dir);
+}
