@@ -355,6 +355,24 @@ fn a_failed_run_is_a_row() {
     assert!(table.rows[0].1[detail].starts_with("failed: "));
 }
 
+/// Issue 12: `sweep -p q0.ball.q=-5` put the ball 5 m inside the floor and "reached the end
+/// time": the overlap check of a scene's initial state was skipped for swept states. It
+/// is an error row naming the overlap, as `check` would say; the valid value still runs.
+#[test]
+fn a_swept_initial_state_inside_an_obstacle_is_an_error_row() {
+    let s = scene("bouncing_ball");
+    let grid = Grid::new(vec![ParamSpec::parse("q0.ball.q=-5,1").unwrap()]).unwrap();
+    let sweep = Sweep::new(&s, grid).unwrap();
+    let rows = sweep.run(Shard::ALL, None, &|_| {}).unwrap();
+    assert_eq!(rows[0].stop(), "error");
+    let detail = &rows[0].outcome.as_ref().unwrap_err().detail;
+    assert!(
+        detail.contains("`ball` and `floor` overlap by 5.100e0 m at the start"),
+        "{detail}"
+    );
+    assert_eq!(rows[1].stop(), "t_end");
+}
+
 fn table_bytes(sweep: &Sweep, shard: Shard, threads: usize) -> Vec<u8> {
     let rows = sweep
         .run(shard, NonZeroUsize::new(threads), &|_| {})

@@ -40,6 +40,7 @@ pub(super) struct Built {
     pub model: Model,
     pub initial: State,
     pub settings: Settings,
+    pub overlap_tolerance: Real,
 }
 
 /// Where a name points.
@@ -139,6 +140,7 @@ pub(super) fn build(
         model,
         initial,
         settings,
+        overlap_tolerance: tolerance,
     })
 }
 
@@ -608,20 +610,41 @@ fn check_overlaps(
     spans: &[Range<usize>],
     loc: &Locator<'_>,
 ) -> Result<(), SceneError> {
+    overlaps(model, initial, tolerance).map_err(|(pair, message)| {
+        loc.at(
+            pair.and_then(|a| spans.get(a).cloned()).unwrap_or(0..0),
+            message,
+        )
+    })
+}
+
+/// The first overlap beyond `tolerance` at `initial` (or a pair parry cannot test), in
+/// words.
+pub(super) fn first_overlap(model: &Model, initial: &State, tolerance: Real) -> Result<(), String> {
+    overlaps(model, initial, tolerance).map_err(|(_, message)| message)
+}
+
+/// The first overlap beyond `tolerance` at `initial`, with the index of the pair's
+/// collider `a` when it is a pair's.
+fn overlaps(
+    model: &Model,
+    initial: &State,
+    tolerance: Real,
+) -> Result<(), (Option<usize>, String)> {
     let mut data = Data::new(model);
     update_positions(model, &mut data, initial.t, initial.q.as_slice())
-        .map_err(|e| loc.at(0..0, e.to_string()))?;
+        .map_err(|e| (None, e.to_string()))?;
     for id in model.pair_ids() {
         let Some(pair) = model.pair(id) else { continue };
         let (a, b) = (
             &model.colliders()[pair.a.index()],
             &model.colliders()[pair.b.index()],
         );
-        let span = spans.get(pair.a.index()).cloned().unwrap_or(0..0);
+        let at = Some(pair.a.index());
         match signed_gap(model, &data, id, 0.0) {
             Ok(Some(gap)) if gap < -tolerance => {
-                return Err(loc.at(
-                    span,
+                return Err((
+                    at,
                     format!(
                         "`{}` and `{}` overlap by {:.3e} m at the start (tolerance {tolerance:.1e} m)",
                         a.name, b.name, -gap
@@ -632,15 +655,15 @@ fn check_overlaps(
             Err(ContactError::Unsupported {
                 shape_a, shape_b, ..
             }) => {
-                return Err(loc.at(
-                    span,
+                return Err((
+                    at,
                     format!(
                         "`{}` ({shape_a}) and `{}` ({shape_b}) cannot be tested for contact",
                         a.name, b.name
                     ),
                 ));
             }
-            Err(e) => return Err(loc.at(span, e.to_string())),
+            Err(e) => return Err((at, e.to_string())),
         }
     }
     Ok(())

@@ -65,6 +65,17 @@ pub struct Scene {
     pub initial: State,
     /// The run settings.
     pub settings: Settings,
+    /// How far shapes may overlap at the start (m): `[contact] overlap_tolerance`.
+    pub overlap_tolerance: crate::math::Real,
+}
+
+impl Scene {
+    /// Checks another initial state of the scene as its own is checked when it loads (a
+    /// sweep's `q0.…` values): no two shapes overlapping by more than the scene's
+    /// tolerance. The message names the two shapes and the overlap.
+    pub fn check_initial(&self, initial: &State) -> Result<(), String> {
+        build::first_overlap(&self.model, initial, self.overlap_tolerance)
+    }
 }
 
 /// Reads and validates the scene file at `path`.
@@ -107,6 +118,7 @@ fn parse(text: String, path: &Path, overrides: Overrides) -> Result<Scene, Scene
         model: built.model,
         initial: built.initial,
         settings: built.settings,
+        overlap_tolerance: built.overlap_tolerance,
         text,
     })
 }

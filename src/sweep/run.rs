@@ -215,6 +215,16 @@ impl<'s> Sweep<'s> {
                 }
             }
         }
+        // A swept initial state is checked as the scene's own is when it loads (a ball
+        // put 5 m inside the floor "reached the end time").
+        if (self.targets.iter()).any(|t| matches!(t, Target::Q(_))) {
+            self.scene
+                .check_initial(&initial)
+                .map_err(|detail| NotRun {
+                    stop: "error",
+                    detail: format!("the initial state: {detail}"),
+                })?;
+        }
         let model = &self.scene.model;
         let summary = match settings.integrator.method {
             Method::MoreauJean => MoreauJean::new(model, &settings, overrides)
