@@ -132,8 +132,9 @@ pub(super) fn build(
         ));
     }
     let initial = State::new(0.0, DVector::from_vec(q0), DVector::from_vec(u0));
-    check_reach(&model, &initial, &body_spans, loc)?;
-    check_overlaps(&model, &initial, tolerance, &collider_spans, loc)?;
+    let data = positions(&model, &initial).map_err(|e| loc.at(0..0, e))?;
+    check_reach(&model, &data, &body_spans, loc)?;
+    check_overlaps(&model, &data, tolerance, &collider_spans, loc)?;
     Ok(Built {
         name: file.name.into_inner(),
         description: file.description.unwrap_or_default(),
@@ -360,24 +361,32 @@ impl Builder<'_> {
         v: &Option<Spanned<Quantity>>,
         kind: Kind,
     ) -> Result<Option<Real>, SceneError> {
-        match v {
-            None => Ok(None),
-            Some(v) => {
-                let x = v.get_ref().si(kind).map_err(|m| self.err(v.span(), m))?;
-                if x.abs() <= ranges::KINEMATIC {
-                    Ok(Some(x))
-                } else {
-                    Err(self.err(
-                        v.span(),
-                        format!(
-                            "got {} (SI), beyond ±{:e}: lengths, speeds, angles and rates are \
-                             bounded by it",
-                            ranges::number(x),
-                            ranges::KINEMATIC
-                        ),
-                    ))
-                }
-            }
+        self.quantity_within(
+            v,
+            kind,
+            ranges::KINEMATIC,
+            ": lengths, speeds, angles and rates are bounded by it",
+        )
+    }
+
+    /// An optional quantity of the given kind, in SI, within `±bound`; `why` ends the
+    /// message of a value beyond it.
+    pub(super) fn quantity_within(
+        &self,
+        v: &Option<Spanned<Quantity>>,
+        kind: Kind,
+        bound: Real,
+        why: &str,
+    ) -> Result<Option<Real>, SceneError> {
+        let Some(v) = v else { return Ok(None) };
+        let x = v.get_ref().si(kind).map_err(|m| self.err(v.span(), m))?;
+        if x.abs() <= bound {
+            Ok(Some(x))
+        } else {
+            Err(self.err(
+                v.span(),
+                format!("got {} (SI), beyond ±{bound:e}{why}", ranges::number(x)),
+            ))
         }
     }
 
@@ -572,13 +581,10 @@ impl Builder<'_> {
 /// x = 1e3 m, 3700 L, takes 7 times the steps; at 2e4 m, 300 times).
 fn check_reach(
     model: &Model,
-    initial: &State,
+    data: &Data,
     spans: &[Range<usize>],
     loc: &Locator<'_>,
 ) -> Result<(), SceneError> {
-    let mut data = Data::new(model);
-    update_positions(model, &mut data, initial.t, initial.q.as_slice())
-        .map_err(|e| loc.at(0..0, e.to_string()))?;
     let length = crate::sim::Scales::of(model, &IntegratorSettings::default()).length;
     let reach = ranges::REACH * length;
     for (k, body) in model.bodies().iter().enumerate() {
@@ -605,43 +611,41 @@ fn check_reach(
 /// `tolerance` (m); parry must support the pair.
 fn check_overlaps(
     model: &Model,
-    initial: &State,
+    data: &Data,
     tolerance: Real,
     spans: &[Range<usize>],
     loc: &Locator<'_>,
 ) -> Result<(), SceneError> {
-    overlaps(model, initial, tolerance).map_err(|(pair, message)| {
-        loc.at(
-            pair.and_then(|a| spans.get(a).cloned()).unwrap_or(0..0),
-            message,
-        )
-    })
+    overlaps(model, data, tolerance)
+        .map_err(|(pair, message)| loc.at(spans.get(pair).cloned().unwrap_or(0..0), message))
 }
 
 /// The first overlap beyond `tolerance` at `initial` (or a pair parry cannot test), in
 /// words.
 pub(super) fn first_overlap(model: &Model, initial: &State, tolerance: Real) -> Result<(), String> {
-    overlaps(model, initial, tolerance).map_err(|(_, message)| message)
+    let data = positions(model, initial)?;
+    overlaps(model, &data, tolerance).map_err(|(_, message)| message)
 }
 
-/// The first overlap beyond `tolerance` at `initial`, with the index of the pair's
-/// collider `a` when it is a pair's.
-fn overlaps(
-    model: &Model,
-    initial: &State,
-    tolerance: Real,
-) -> Result<(), (Option<usize>, String)> {
+/// The poses of `model` at `initial` (a workspace with its positions updated).
+fn positions(model: &Model, initial: &State) -> Result<Data, String> {
     let mut data = Data::new(model);
     update_positions(model, &mut data, initial.t, initial.q.as_slice())
-        .map_err(|e| (None, e.to_string()))?;
+        .map_err(|e| e.to_string())?;
+    Ok(data)
+}
+
+/// The first overlap beyond `tolerance` at the poses of `data`, with the index of the
+/// pair's collider `a`.
+fn overlaps(model: &Model, data: &Data, tolerance: Real) -> Result<(), (usize, String)> {
     for id in model.pair_ids() {
         let Some(pair) = model.pair(id) else { continue };
         let (a, b) = (
             &model.colliders()[pair.a.index()],
             &model.colliders()[pair.b.index()],
         );
-        let at = Some(pair.a.index());
-        match signed_gap(model, &data, id, 0.0) {
+        let at = pair.a.index();
+        match signed_gap(model, data, id, 0.0) {
             Ok(Some(gap)) if gap < -tolerance => {
                 return Err((
                     at,

@@ -112,23 +112,9 @@ impl Builder<'_> {
     /// A force element of a joint (stiffness, damping, torque or force; SI, plain), within
     /// `±1e12` ([`ranges::FORCE_ELEMENT`]); 0 when absent.
     pub(super) fn force_element(&self, v: &Option<Spanned<Quantity>>) -> Result<Real, SceneError> {
-        let Some(v) = v else { return Ok(0.0) };
-        let x = v
-            .get_ref()
-            .si(Kind::Plain)
-            .map_err(|m| self.err(v.span(), m))?;
-        if x.abs() <= ranges::FORCE_ELEMENT {
-            Ok(x)
-        } else {
-            Err(self.err(
-                v.span(),
-                format!(
-                    "got {}, beyond ±{:e} (a force element)",
-                    ranges::number(x),
-                    ranges::FORCE_ELEMENT
-                ),
-            ))
-        }
+        let x =
+            self.quantity_within(v, Kind::Plain, ranges::FORCE_ELEMENT, " (a force element)")?;
+        Ok(x.unwrap_or(0.0))
     }
 
     /// `drive = { rate, amplitude, angular_frequency, phase }` with `q₀` the joint's

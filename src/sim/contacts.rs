@@ -30,7 +30,7 @@
 
 use super::impact_map::pair_name;
 use super::observer::{PairMode, Transition};
-use super::persistent::{Candidate, Closed, Hold, pair_points};
+use super::persistent::{Candidate, Closed, Hold, Selection, pair_points};
 use super::{
     AtTime, ImpactCause, ImpactEvent, Level, Observer, SimError, Simulation, StopReason, Support,
 };
@@ -443,9 +443,6 @@ impl Simulation<'_> {
         if candidates.is_empty() {
             return Ok(candidates);
         }
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
-        forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
         let points: Vec<Candidate> = (candidates.iter())
             .map(|p| Candidate {
                 pair: p.pair,
@@ -454,14 +451,7 @@ impl Simulation<'_> {
                 slip: None,
             })
             .collect();
-        let sel = self.system.persistent.select(
-            self.model,
-            &self.sampler,
-            (t, q, u),
-            &points,
-            Real::INFINITY,
-        )?;
-        self.restore_persistent();
+        let sel = self.select_at(t, y, &points, Real::INFINITY)?;
         Ok((candidates.iter().zip(&sel.free))
             .filter(|(p, a_n)| p.v_n <= self.scales.v_rest_at(**a_n))
             .map(|(p, _)| *p)
@@ -472,8 +462,9 @@ impl Simulation<'_> {
     /// persistent contact force `λ` of the `held` points at that state, times the time
     /// `t∞ − t` the hops left would have lasted (the latest `t∞` of the pairs; at least the
     /// lifting point's own hop, `2 v_n⁻ / |a_n|` with the most negative free normal
-    /// acceleration of the held points, when `t∞` could not be extrapolated). `λ` is that of the consistent set of modes with the most open
-    /// points, the one the mode selection that follows takes.
+    /// acceleration of the held points, when `t∞` could not be extrapolated). `λ` is that
+    /// of the consistent set of modes the mode selection that follows takes first
+    /// ([`most_open`]).
     fn support(
         &mut self,
         t: Real,
@@ -484,14 +475,11 @@ impl Simulation<'_> {
         let until = (held.iter())
             .filter_map(|p| self.accumulating[p.pair.index()].as_ref()?.t_inf)
             .fold(t, Real::max);
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
         // The lifting points' own hops: v_n⁻ / |a_n| up and as long down.
         let hop = (closing.iter())
             .filter(|ev| ev.v_a.n > 0.0)
             .map(|ev| ev.v_a.n)
             .fold(0.0, Real::max);
-        forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
         let candidates: Vec<Candidate> = (held.iter())
             .map(|p| Candidate {
                 pair: p.pair,
@@ -500,16 +488,8 @@ impl Simulation<'_> {
                 slip: None,
             })
             .collect();
-        let sel = self.system.persistent.select(
-            self.model,
-            &self.sampler,
-            (t, q, u),
-            &candidates,
-            1e3 * self.scales.v_tiny,
-        )?;
-        self.restore_persistent();
-        let open = |s: &lcp::Solution| s.modes.iter().filter(|m| **m == Mode::Open).count();
-        let Some(chosen) = sel.solutions.iter().max_by_key(|s| open(s)) else {
+        let sel = self.select_at(t, y, &candidates, 1e3 * self.scales.v_tiny)?;
+        let Some(&chosen) = most_open(&sel.solutions).first() else {
             return Err(SimError::Contact {
                 t,
                 message: "the end of a rocking accumulation: the closed contacts have no \
@@ -591,6 +571,30 @@ impl Simulation<'_> {
         }
     }
 
+    /// The mode selection of `candidates` at `(t, y)` ([`Persistent::select`] on the
+    /// forward dynamics of that state), with the closed set put back in the ODE system
+    /// afterwards.
+    fn select_at(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        candidates: &[Candidate],
+        v_slip: Real,
+    ) -> Result<Selection, SimError> {
+        let n = self.model.nq();
+        let (q, u) = (&y[..n], &y[n..2 * n]);
+        forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
+        let sel = (self.system.persistent).select(
+            self.model,
+            &self.sampler,
+            (t, q, u),
+            candidates,
+            v_slip,
+        );
+        self.restore_persistent();
+        sel
+    }
+
     /// Puts the closed set back in the ODE system after a selection used its workspace.
     fn restore_persistent(&mut self) {
         let closed = self.gaps.persistent.closed().to_vec();
@@ -634,9 +638,6 @@ impl Simulation<'_> {
         if resting.is_empty() {
             return Ok(Selected::Set(vec![]));
         }
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
-        forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
         // The resting point nearest the one that starts to slip.
         let slipping = starts_to_slip.and_then(|(pair, local, _)| {
             (0..resting.len())
@@ -660,14 +661,7 @@ impl Simulation<'_> {
             })
             .collect();
         let v_slip = 1e3 * self.scales.v_tiny;
-        let sel = self.system.persistent.select(
-            self.model,
-            &self.sampler,
-            (t, q, u),
-            &candidates,
-            v_slip,
-        )?;
-        self.restore_persistent();
+        let sel = self.select_at(t, y, &candidates, v_slip)?;
         let sliding_painleve = |i: usize| sel.painleve[i] <= 0.0;
         let chosen = match sel.solutions.len() {
             0 => {
@@ -700,10 +694,7 @@ impl Simulation<'_> {
                 // The least constraint: the most open points. A choice undone at once (the
                 // next event at the same instant asks again) gives way to the next one in
                 // that order, so the selection cannot chatter between the same sets.
-                let mut ranked: Vec<&lcp::Solution> = sel.solutions.iter().collect();
-                ranked.sort_by_key(|s| {
-                    std::cmp::Reverse(s.modes.iter().filter(|m| **m == Mode::Open).count())
-                });
+                let ranked = most_open(&sel.solutions);
                 let (t_prev, undone) = self.indeterminate;
                 let undone = if t - t_prev <= 1e-9 * (1.0 + t.abs()) {
                     undone + 1
@@ -940,6 +931,14 @@ impl Simulation<'_> {
         self.ledger(t, ev.into_iter().collect(), observer)?;
         Ok(())
     }
+}
+
+/// The consistent sets of modes ranked by the least constraint: the most open points
+/// first, in the enumeration's order among equals (the rule of the mode selection).
+fn most_open(solutions: &[lcp::Solution]) -> Vec<&lcp::Solution> {
+    let mut ranked: Vec<&lcp::Solution> = solutions.iter().collect();
+    ranked.sort_by_key(|s| std::cmp::Reverse(s.modes.iter().filter(|m| **m == Mode::Open).count()));
+    ranked
 }
 
 /// An accumulation of impacts that ended on a pair at the current instant: what the

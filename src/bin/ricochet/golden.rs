@@ -9,11 +9,9 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Subcommand;
-use ricochet::impact::Law;
-use ricochet::integrate::Method;
 use ricochet::math::Real;
 use ricochet::regress::golden::{self, Checked};
-use ricochet::regress::{DEFAULT_CHECKPOINTS, RunOverrides, Tolerances};
+use ricochet::regress::{DEFAULT_CHECKPOINTS, Tolerances};
 
 /// `println!` through an [`Out`].
 macro_rules! say {
@@ -46,33 +44,9 @@ struct RecordArgs {
     /// The folder of the golden files (created if missing).
     #[arg(long)]
     dir: PathBuf,
-    /// End time (s), instead of the scene's (recorded in the file).
-    #[arg(long, allow_negative_numbers = true)]
-    t_end: Option<Real>,
-    /// Impact law for every contact: newton, kane-levinson, poisson, stronge.
-    #[arg(long)]
-    law: Option<Law>,
-    /// Coefficient of restitution for every contact, in [0, 1].
-    #[arg(long, allow_negative_numbers = true)]
-    e: Option<Real>,
-    /// Coefficient of friction for every contact, ≥ 0.
-    #[arg(long, allow_negative_numbers = true)]
-    mu: Option<Real>,
-    /// Integration method: dopri5, rk4, moreau-jean.
-    #[arg(long)]
-    method: Option<Method>,
-    /// Relative tolerance of DOPRI5 (the integrator's; `--cmp-rtol` is the comparison's).
-    #[arg(long, allow_negative_numbers = true)]
-    rtol: Option<Real>,
-    /// Absolute tolerance of DOPRI5.
-    #[arg(long, allow_negative_numbers = true)]
-    atol: Option<Real>,
-    /// Step of RK4 and of Moreau–Jean (s).
-    #[arg(long, allow_negative_numbers = true)]
-    dt: Option<Real>,
-    /// Energy-drift budget, relative (instead of the scene's `[run] max_drift`).
-    #[arg(long, allow_negative_numbers = true)]
-    max_drift: Option<Real>,
+    /// The overrides of the scenes' settings (recorded in the files).
+    #[command(flatten)]
+    overrides: crate::run::OverrideArgs,
     /// Relative tolerance of the comparison, written in the golden file.
     #[arg(long, default_value = "1e-9", allow_negative_numbers = true)]
     cmp_rtol: Real,
@@ -117,17 +91,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 fn record(args: &RecordArgs) -> anyhow::Result<ExitCode> {
-    let overrides = RunOverrides {
-        t_end: args.t_end,
-        law: args.law,
-        e: args.e,
-        mu: args.mu,
-        method: args.method,
-        rtol: args.rtol,
-        atol: args.atol,
-        dt: args.dt,
-        max_drift: args.max_drift,
-    };
+    let overrides = args.overrides.overrides();
     // The overrides and tolerances are checked once, before any run.
     crate::run::apply_overrides(&overrides, &mut ricochet::settings::Settings::default())?;
     let tolerances = Tolerances {

@@ -29,6 +29,26 @@ pub struct Args {
     /// folder).
     #[arg(short, long)]
     output: Option<PathBuf>,
+    #[command(flatten)]
+    overrides: OverrideArgs,
+    /// Also write the run summary (JSON: settings, audit, drift, every ledger row, the final
+    /// state and checkpoints) to this file.
+    #[arg(long, value_name = "FILE.json")]
+    summary: Option<PathBuf>,
+    /// About how many checkpoints (states on the output grid) the summary keeps.
+    #[arg(long, default_value_t = ricochet::regress::DEFAULT_CHECKPOINTS, value_name = "N")]
+    checkpoints: u64,
+    /// Print only the summary line, not the impact table and the audit.
+    #[arg(short, long)]
+    quiet: bool,
+    #[command(flatten)]
+    live: crate::live::LiveArgs,
+}
+
+/// The options that override a scene's settings: `ricochet run`'s, and those
+/// `ricochet golden record` writes in a golden file.
+#[derive(clap::Args)]
+pub struct OverrideArgs {
     /// End time (s), instead of the scene's.
     #[arg(long, allow_negative_numbers = true)]
     t_end: Option<Real>,
@@ -44,7 +64,7 @@ pub struct Args {
     /// Integration method: dopri5, rk4 (event-driven), moreau-jean (time-stepping).
     #[arg(long)]
     method: Option<Method>,
-    /// Relative tolerance of DOPRI5.
+    /// Relative tolerance of DOPRI5 (the integrator's).
     #[arg(long, allow_negative_numbers = true)]
     rtol: Option<Real>,
     /// Absolute tolerance of DOPRI5.
@@ -54,21 +74,27 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true)]
     dt: Option<Real>,
     /// Energy-drift budget, relative to the run's energy scale (instead of the scene's
-    /// `[run] max_drift`): a run whose audit drifts more exits with 1, after writing its log.
+    /// `[run] max_drift`): a run whose audit drifts more fails (exit 1), after writing its
+    /// log.
     #[arg(long, allow_negative_numbers = true)]
     max_drift: Option<Real>,
-    /// Also write the run summary (JSON: settings, audit, drift, every ledger row, the final
-    /// state and checkpoints) to this file.
-    #[arg(long, value_name = "FILE.json")]
-    summary: Option<PathBuf>,
-    /// About how many checkpoints (states on the output grid) the summary keeps.
-    #[arg(long, default_value_t = ricochet::regress::DEFAULT_CHECKPOINTS, value_name = "N")]
-    checkpoints: u64,
-    /// Print only the summary line, not the impact table and the audit.
-    #[arg(short, long)]
-    quiet: bool,
-    #[command(flatten)]
-    live: crate::live::LiveArgs,
+}
+
+impl OverrideArgs {
+    /// The overrides given.
+    pub fn overrides(&self) -> RunOverrides {
+        RunOverrides {
+            t_end: self.t_end,
+            law: self.law,
+            e: self.e,
+            mu: self.mu,
+            method: self.method,
+            rtol: self.rtol,
+            atol: self.atol,
+            dt: self.dt,
+            max_drift: self.max_drift,
+        }
+    }
 }
 
 /// One row of the impact table.
@@ -172,18 +198,7 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut scene = ricochet::scene::load(&args.scene)?;
     // Overrides of the scene's settings.
-    let cli = RunOverrides {
-        t_end: args.t_end,
-        law: args.law,
-        e: args.e,
-        mu: args.mu,
-        method: args.method,
-        rtol: args.rtol,
-        atol: args.atol,
-        dt: args.dt,
-        max_drift: args.max_drift,
-    };
-    let overrides = apply_overrides(&cli, &mut scene.settings)?;
+    let overrides = apply_overrides(&args.overrides.overrides(), &mut scene.settings)?;
     let output = args
         .output
         .unwrap_or_else(|| PathBuf::from(format!("{}.mcap", scene.name)));
