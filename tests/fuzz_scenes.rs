@@ -16,18 +16,6 @@ use proptest::test_runner::{Config, TestRunner};
 use ricochet::scene::{self, SceneError};
 use ricochet::sim::{MaterialOverride, MoreauJean, NullObserver, Simulation, StopReason};
 
-const SCENES: [&str; 9] = [
-    "bouncing_ball",
-    "chain",
-    "falling_rod",
-    "kane_double_pendulum",
-    "painleve_rod",
-    "pendulum_wall",
-    "rimless_wheel",
-    "rocking_block",
-    "spinning_disk_particle",
-];
-
 /// Values that replace a number: extremes, non-finite, wrong types, odd vectors.
 const VALUES: [&str; 24] = [
     "0",
@@ -283,13 +271,17 @@ fn case(name: &str, text: &str, tally: &mut Tally) -> Result<(), String> {
 }
 
 fn fuzz(cases: u32) {
-    let texts: Vec<(&str, String)> = SCENES
-        .iter()
-        .map(|n| {
-            let path = format!("{}/scenes/{n}.toml", env!("CARGO_MANIFEST_DIR"));
-            (*n, std::fs::read_to_string(path).unwrap())
+    // Every bundled scene, in name order.
+    let dir = format!("{}/scenes", env!("CARGO_MANIFEST_DIR"));
+    let mut texts: Vec<(String, String)> = (std::fs::read_dir(dir).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| {
+            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read_to_string(&p).unwrap())
         })
         .collect();
+    texts.sort();
     // A fixed seed: the same cases on every run and machine.
     let config = Config {
         cases,
@@ -304,7 +296,7 @@ fn fuzz(cases: u32) {
         TestRunner::new_with_rng(config, rng)
     };
     let tally = std::cell::RefCell::new(Tally::default());
-    let strategy = (0..SCENES.len(), proptest::collection::vec(mutation(), 1..4));
+    let strategy = (0..texts.len(), proptest::collection::vec(mutation(), 1..4));
     let result = runner.run(&strategy, |(k, edits)| {
         let (name, base) = &texts[k];
         let text = edits.iter().fold(base.clone(), |t, m| apply(&t, m));

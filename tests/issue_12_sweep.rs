@@ -8,46 +8,18 @@
 //! (the table is written, its rows say why), 128 + the signal's number when interrupted.
 
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use ricochet::sweep::{Grid, ParamSpec, Shard, Sweep, SweepError, merge, read_table};
 
-const BIN: &str = env!("CARGO_BIN_EXE_ricochet");
+#[path = "common/cli.rs"]
+mod cli;
+use cli::{BIN, TempDir, ricochet};
 
 fn scene_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"))
-}
-
-/// A fresh, empty temporary folder for one test, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(test: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("ricochet-i12-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn ricochet(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap()
 }
 
 /// A sweep with a failed run (the ball 1e300 m up: its first step is refused) exits 1 and
@@ -58,7 +30,7 @@ fn the_exit_status_says_whether_every_run_succeeded() {
     let scene = scene_path("bouncing_ball");
     let scene = scene.to_str().unwrap();
     let out = ricochet(
-        &dir.0,
+        dir.path(),
         &[
             "sweep",
             scene,
@@ -82,7 +54,7 @@ fn the_exit_status_says_whether_every_run_succeeded() {
     assert_eq!(table.header.incomplete, None);
 
     let out = ricochet(
-        &dir.0,
+        dir.path(),
         &[
             "sweep",
             scene,
@@ -114,7 +86,7 @@ fn a_signal_writes_the_finished_rows_marked_incomplete() {
                 "t_end=0.1,0.2,0.3,100000",
             ])
             .args(["--threads", "1", "-o", &csv])
-            .current_dir(&dir.0)
+            .current_dir(dir.path())
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -152,7 +124,7 @@ fn a_signal_writes_the_finished_rows_marked_incomplete() {
         let err = merge(vec![table]).unwrap_err();
         assert!(matches!(err, SweepError::Incomplete { .. }), "{err}");
         assert!(err.to_string().contains(&csv), "{err}");
-        let out = ricochet(&dir.0, &["sweep", "--merge", &csv, "-o", "merged.csv"]);
+        let out = ricochet(dir.path(), &["sweep", "--merge", &csv, "-o", "merged.csv"]);
         assert_eq!(out.status.code(), Some(1));
         assert!(String::from_utf8_lossy(&out.stderr).contains("incomplete"));
         assert!(!dir.join("merged.csv").exists());

@@ -4,7 +4,7 @@
 //! printed rows of Table 2, the boundary curves against their defining Eq. (36), the W of
 //! the pendulum scene against its closed form, the SVG, and the command line.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 mod common;
@@ -14,7 +14,9 @@ use ricochet::regions::{
     self, Axis, BoundaryKind, Cell, EnergySign, MapSpec, RegionMap, RegionsError,
 };
 
-const BIN: &str = env!("CARGO_BIN_EXE_ricochet");
+#[path = "common/cli.rs"]
+mod cli;
+use cli::{BIN, TempDir};
 
 /// W of every sign case of Table 1 (and of both sides of it, through the mirror at α < 0),
 /// besides the pendulum's: balanced (m_nt = 0), strongly coupled either way, nearly
@@ -510,25 +512,6 @@ fn the_svg_is_well_formed_and_holds_the_map() {
     }
 }
 
-/// A fresh, empty temporary folder for one test, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(test: &str) -> Self {
-        let dir =
-            std::env::temp_dir().join(format!("ricochet-regions-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 fn ricochet(dir: &Path, args: &[&str]) -> Output {
     Command::new(BIN)
         .current_dir(dir)
@@ -542,7 +525,7 @@ fn ricochet(dir: &Path, args: &[&str]) -> Output {
 fn the_cli_writes_one_svg_per_law() {
     let dir = TempDir::new("writes");
     let out = ricochet(
-        &dir.0,
+        dir.path(),
         &[
             "--w",
             "0.3365,-0.5071,0.8134",
@@ -566,12 +549,12 @@ fn the_cli_writes_one_svg_per_law() {
     assert_eq!(files.len(), 2, "{stdout}");
     for (f, law) in files.iter().zip(["newton", "stronge"]) {
         assert!(f.ends_with(&format!("regions_{law}.svg")), "{f}");
-        xml_elements(&std::fs::read_to_string(dir.0.join(f)).unwrap());
+        xml_elements(&std::fs::read_to_string(dir.join(f)).unwrap());
     }
     // From a scene: the four laws, named after it, the scene's point marked.
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/kane_double_pendulum.toml");
     let out = ricochet(
-        &dir.0,
+        dir.path(),
         &["--scene", scene.to_str().unwrap(), "--resolution", "21"],
     );
     assert!(
@@ -581,8 +564,7 @@ fn the_cli_writes_one_svg_per_law() {
     );
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(stdout.lines().count(), 4, "{stdout}");
-    let svg =
-        std::fs::read_to_string(dir.0.join("kane_double_pendulum_kane-levinson.svg")).unwrap();
+    let svg = std::fs::read_to_string(dir.join("kane_double_pendulum_kane-levinson.svg")).unwrap();
     assert!(svg.contains("α = 1.9908, μ = 0.2"), "the scene's point");
     assert!(String::from_utf8_lossy(&out.stderr).contains("rodB/floor"));
 }
@@ -613,14 +595,14 @@ fn the_cli_rejects_bad_input_with_a_clear_message() {
         (&["--scene", "missing.toml"], "missing.toml"),
     ];
     for (args, message) in cases {
-        let out = ricochet(&dir.0, args);
+        let out = ricochet(dir.path(), args);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(stderr.contains(message), "{args:?}: {stderr}");
         assert!(out.stdout.is_empty(), "{args:?}: nothing written");
     }
     assert_eq!(
-        std::fs::read_dir(&dir.0).unwrap().count(),
+        std::fs::read_dir(dir.path()).unwrap().count(),
         0,
         "no file written"
     );

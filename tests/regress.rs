@@ -22,6 +22,10 @@ use ricochet::model::Model;
 use ricochet::regress::{Collector, Place, RunOverrides, Summary, Tolerances, compare, run_scene};
 use ricochet::sim::{ImpactEvent, Level, Observer, ObserverError, Sample, Simulation};
 
+#[path = "common/cli.rs"]
+mod cli;
+use cli::TempDir;
+
 fn repo(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
@@ -343,26 +347,4 @@ fn a_rocking_ends_support_is_compared() {
         (first.field.as_str(), first.t),
         ("support", Some(a.impacts[k].t))
     );
-}
-
-/// A fresh temporary folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(test: &str) -> TempDir {
-        let dir =
-            std::env::temp_dir().join(format!("ricochet-regress-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }

@@ -205,20 +205,18 @@ fn first_contact(
     s: &[f64; 6],
     (obs, obs_pose): (&dyn Shape, &Pose),
 ) -> Option<(f64, f64)> {
-    let body_margin = body.margin;
     let obstacle = vertices(obs, obs_pose);
     let core = vertices(body.core.as_ref(), &Pose::identity());
     let dist = |t: f64| {
         let pose = pose_at(s, t);
-        let body: Vec<Vector> = core.iter().map(|&p| pose * p).collect();
+        let points: Vec<Vector> = core.iter().map(|&p| pose * p).collect();
         let d = match obs.as_halfspace() {
-            Some(h) => body
-                .iter()
+            Some(h) => (points.iter())
                 .map(|p| h.normal.dot(*p))
                 .fold(f64::INFINITY, f64::min),
-            None => polygon_distance(&body, &obstacle),
+            None => polygon_distance(&points, &obstacle),
         };
-        d - body_margin
+        d - body.margin
     };
     // Every point's speed over [0, T_MAX]: |v₀| + g T + |ω| reach.
     let v = s[3].hypot(s[4]) + G * T_MAX + s[5].abs() * body.reach;

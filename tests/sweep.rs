@@ -19,8 +19,7 @@
 
 use std::io::Cursor;
 use std::num::NonZeroUsize;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::PathBuf;
 
 use ricochet::impact::Law;
 use ricochet::integrate::Method;
@@ -31,7 +30,9 @@ use ricochet::sweep::{
     read_table, write_table,
 };
 
-const BIN: &str = env!("CARGO_BIN_EXE_ricochet");
+#[path = "common/cli.rs"]
+mod cli;
+use cli::{TempDir, ricochet};
 
 fn scene_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"))
@@ -496,37 +497,6 @@ fn merge_errors() {
     assert!(merge(vec![]).is_err());
 }
 
-/// A fresh, empty temporary folder for one test, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(test: &str) -> TempDir {
-        let dir =
-            std::env::temp_dir().join(format!("ricochet-sweep-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn ricochet(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap()
-}
-
 #[test]
 fn the_command_line_sweeps_shards_and_merges() {
     let dir = TempDir::new("cli");
@@ -539,7 +509,7 @@ fn the_command_line_sweeps_shards_and_merges() {
         v.extend(extra);
         v
     };
-    let out = ricochet(&dir.0, &args(&["--threads", "2"]));
+    let out = ricochet(dir.path(), &args(&["--threads", "2"]));
     assert!(out.status.success(), "{out:?}");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -564,11 +534,11 @@ fn the_command_line_sweeps_shards_and_merges() {
     assert_eq!(whole, table_bytes(&sweep, Shard::ALL, 1));
 
     for i in ["0/2", "1/2"] {
-        let out = ricochet(&dir.0, &args(&["--shard", i, "--threads", "1"]));
+        let out = ricochet(dir.path(), &args(&["--shard", i, "--threads", "1"]));
         assert!(out.status.success(), "{out:?}");
     }
     let out = ricochet(
-        &dir.0,
+        dir.path(),
         &[
             "sweep",
             "--merge",
@@ -583,7 +553,7 @@ fn the_command_line_sweeps_shards_and_merges() {
 
     // A shard missing.
     let out = ricochet(
-        &dir.0,
+        dir.path(),
         &[
             "sweep",
             "--merge",
@@ -605,7 +575,7 @@ fn the_command_line_sweeps_shards_and_merges() {
     ] {
         let mut a = vec!["sweep", scene_arg, "-o", "x.csv"];
         a.extend(extra);
-        let out = ricochet(&dir.0, &a);
+        let out = ricochet(dir.path(), &a);
         assert!(!out.status.success(), "{a:?}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains(culprit), "{a:?}: {stderr}");
