@@ -187,6 +187,23 @@ pub struct Power {
 ///
 /// Requires [`update_positions`]. Writes `data.composite` and `data.mass`.
 pub fn mass_matrix(model: &Model, data: &mut Data) {
+    if model.is_holonomic() {
+        let mut mass = std::mem::take(&mut data.mass);
+        tree_mass_matrix(model, data, &mut mass);
+        data.mass = mass;
+    } else {
+        // M = Sᵀ M_v S  (Kane's generalized inertia forces in the speeds u).
+        let mut mass_tree = std::mem::take(&mut data.mass_tree);
+        tree_mass_matrix(model, data, &mut mass_tree);
+        data.mass_map.gemm(1.0, &mass_tree, &data.speed_map, 0.0);
+        data.mass.gemm_tr(1.0, &data.speed_map, &data.mass_map, 0.0);
+        data.mass_tree = mass_tree;
+    }
+}
+
+/// The composite rigid body algorithm of [`mass_matrix`] over the tree speeds, into `out`
+/// `[nv × nv]`.
+fn tree_mass_matrix(model: &Model, data: &mut Data, out: &mut DMatrix<Real>) {
     let joints = model.joints();
     // Composite inertias, leaves first.
     data.composite.copy_from_slice(&data.body_inertia);
@@ -201,9 +218,9 @@ pub fn mass_matrix(model: &Model, data: &mut Data) {
     }
     // Rows: for each free coordinate, the wrench I^c S walked up to the root. M is
     // symmetric; both triangles are written (column-major slice, M_rc at c·nu + r).
-    let nu = model.nu();
+    let nu = model.nv();
     let (subspace, frames, composite) = (&data.subspace, &data.joint_frame, &data.composite);
-    let mass = data.mass.as_mut_slice();
+    let mass = out.as_mut_slice();
     mass.fill(0.0);
     for (i, joint) in joints.iter().enumerate() {
         let Some(si) = model.q_index(JointId(i)) else {
@@ -275,7 +292,8 @@ fn newton_euler(model: &Model, data: &mut Data, accel: FreeAccel<'_>) {
             let acc = match (free, accel) {
                 (None, _) | (_, FreeAccel::Zero) => qdd[k],
                 (Some(s), FreeAccel::Given(udot)) => udot[s + k],
-                (Some(s), FreeAccel::Solved) => data.udot[s + k],
+                (Some(s), FreeAccel::Solved) if model.is_holonomic() => data.udot[s + k],
+                (Some(s), FreeAccel::Solved) => data.tree_accel[s + k],
             };
             a += data.subspace[i][k] * acc;
         }
@@ -329,11 +347,43 @@ fn gather_free(model: &Model, data: &Data, out: &mut [Real]) {
 /// springs, dampers and efforts `Q_force = −k (q − q_rest) − c q̇ + τ`).
 ///
 /// Requires [`update_velocities`]. Writes `data.bias` (and the Newton–Euler scratch).
+///
+/// With nonholonomic constraints, `h = Sᵀ (M_v v̇₀ + h_v)`: the tree's inverse dynamics at
+/// the accelerations `v̇₀` the removed speeds have when `u̇ = 0` (see
+/// [`crate::constraints`]), projected on the speeds (Kane's equations in `u`,
+/// [P, Eq. (1)]); `data.tree_accel0` holds `v̇₀`.
 pub fn bias_forces(model: &Model, data: &mut Data) {
     newton_euler(model, data, FreeAccel::Zero);
-    let mut bias = std::mem::take(&mut data.bias);
-    gather_free(model, data, bias.as_mut_slice());
-    data.bias = bias;
+    if model.is_holonomic() {
+        let mut bias = std::mem::take(&mut data.bias);
+        gather_free(model, data, bias.as_mut_slice());
+        data.bias = bias;
+    } else {
+        crate::constraints::removed_accelerations(model, data);
+        let accel0 = std::mem::take(&mut data.tree_accel0);
+        newton_euler(model, data, FreeAccel::Given(accel0.as_slice()));
+        data.tree_accel0 = accel0;
+        project_tree_forces(model, data, ProjectInto::Bias);
+    }
+}
+
+/// Where [`project_tree_forces`] writes.
+enum ProjectInto {
+    Bias,
+    Tau,
+}
+
+/// Gathers the tree's joint forces of the last Newton–Euler pass into
+/// `data.force_tree` and projects them on the speeds, `Sᵀ f`.
+fn project_tree_forces(model: &Model, data: &mut Data, into: ProjectInto) {
+    let mut f = std::mem::take(&mut data.force_tree);
+    gather_free(model, data, f.as_mut_slice());
+    let out = match into {
+        ProjectInto::Bias => &mut data.bias,
+        ProjectInto::Tau => &mut data.tau,
+    };
+    out.gemv_tr(1.0, &data.speed_map, &f, 0.0);
+    data.force_tree = f;
 }
 
 /// Computes the generalized forces that produce the accelerations `udot`:
@@ -347,10 +397,27 @@ pub fn inverse_dynamics(
     udot: &[Real],
 ) -> Result<(), DynamicsError> {
     check_len("udot", model.nu(), udot.len())?;
-    newton_euler(model, data, FreeAccel::Given(udot));
-    let mut tau = std::mem::take(&mut data.tau);
-    gather_free(model, data, tau.as_mut_slice());
-    data.tau = tau;
+    if model.is_holonomic() {
+        newton_euler(model, data, FreeAccel::Given(udot));
+        let mut tau = std::mem::take(&mut data.tau);
+        gather_free(model, data, tau.as_mut_slice());
+        data.tau = tau;
+    } else {
+        // v̇ = S u̇ + v̇₀, τ = Sᵀ (M_v v̇ + h_v).
+        newton_euler(model, data, FreeAccel::Zero);
+        crate::constraints::removed_accelerations(model, data);
+        let mut accel = std::mem::take(&mut data.tree_accel);
+        accel.copy_from(&data.tree_accel0);
+        accel.gemv(
+            1.0,
+            &data.speed_map,
+            &nalgebra::DVectorView::from_slice(udot, udot.len()),
+            1.0,
+        );
+        newton_euler(model, data, FreeAccel::Given(accel.as_slice()));
+        data.tree_accel = accel;
+        project_tree_forces(model, data, ProjectInto::Tau);
+    }
     Ok(())
 }
 
@@ -409,11 +476,20 @@ pub fn forward_dynamics_with(
         data.udot[r] = tau.map_or(0.0, |tau| tau[r]) - data.bias[r];
     }
     data.mass_factor.solve_in_place(data.udot.as_mut_slice())?;
-    check_finite(t, "udot", data.udot.as_slice())
+    check_finite(t, "udot", data.udot.as_slice())?;
+    if !model.is_holonomic() {
+        // v̇ = S u̇ + v̇₀, for the drives' power.
+        let mut accel = std::mem::take(&mut data.tree_accel);
+        accel.copy_from(&data.tree_accel0);
+        accel.gemv(1.0, &data.speed_map, &data.udot, 1.0);
+        data.tree_accel = accel;
+    }
+    Ok(())
 }
 
 /// The right-hand side of the first-order system `ẏ = f(t, y)` with `y = [q; u]`:
-/// `dy = [u; M⁻¹(−h)]`. Allocates nothing; see [`forward_dynamics`].
+/// `dy = [A u + b; M⁻¹(−h)]` (`A u + b = u` for a holonomic model). Allocates nothing;
+/// see [`forward_dynamics`].
 pub fn ode_rhs(
     model: &Model,
     data: &mut Data,
@@ -421,14 +497,53 @@ pub fn ode_rhs(
     y: &[Real],
     dy: &mut [Real],
 ) -> Result<(), DynamicsError> {
-    let n = model.nq();
-    check_len("y", 2 * n, y.len())?;
-    check_len("dy", 2 * n, dy.len())?;
+    let (n, nu) = (model.nq(), model.nu());
+    check_len("y", n + nu, y.len())?;
+    check_len("dy", n + nu, dy.len())?;
     let (q, u) = y.split_at(n);
     forward_dynamics(model, data, t, q, u)?;
-    dy[..n].copy_from_slice(u);
+    coordinate_rates(model, data, u, &mut dy[..n]);
     dy[n..].copy_from_slice(data.udot.as_slice());
     Ok(())
+}
+
+/// The coordinate rates `q̇ = A(q, t) u + b(q, t)` [P, Eq. (1)] at the state of the last
+/// [`update_velocities`] (at the speeds `u`): `u` itself for a holonomic model.
+pub fn coordinate_rates(model: &Model, data: &Data, u: &[Real], qdot: &mut [Real]) {
+    if model.is_holonomic() {
+        qdot.copy_from_slice(u);
+    } else {
+        crate::constraints::coordinate_rates(model, data, qdot);
+    }
+}
+
+/// The kinematic equations `q̇ = A(q, t) u + b(q, t)` [P, Eq. (1)] at `(t, q)`: `A`
+/// `[nq × nu]` column by column (`A e_i = q̇(e_i) − b`), and `b = q̇(u = 0)`, the rates due
+/// to the prescribed motions alone. For reports (`ricochet check`); it allocates.
+pub fn kinematic_equations(
+    model: &Model,
+    data: &mut Data,
+    t: Real,
+    q: &[Real],
+) -> Result<(DMatrix<Real>, nalgebra::DVector<Real>), KinematicsError> {
+    let (nq, nu) = (model.nq(), model.nu());
+    update_positions(model, data, t, q)?;
+    let mut u = vec![0.0; nu];
+    let mut b = nalgebra::DVector::zeros(nq);
+    update_velocities(model, data, &u)?;
+    coordinate_rates(model, data, &u, b.as_mut_slice());
+    let mut a = DMatrix::zeros(nq, nu);
+    let mut col = vec![0.0; nq];
+    for i in 0..nu {
+        u.fill(0.0);
+        u[i] = 1.0;
+        update_velocities(model, data, &u)?;
+        coordinate_rates(model, data, &u, &mut col);
+        for r in 0..nq {
+            a[(r, i)] = col[r] - b[r];
+        }
+    }
+    Ok((a, b))
 }
 
 /// Solves `M x = b` in place with the factor of the last [`forward_dynamics`] (`b`

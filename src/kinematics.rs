@@ -75,6 +75,19 @@ pub enum KinematicsError {
         /// The index given.
         collider: usize,
     },
+    /// The speeds removed by the nonholonomic constraints cannot be solved for at this
+    /// configuration (`C_d` singular): a blade lines up with a speed it removes.
+    #[error(
+        "the speed `{speed}` removed by constraint `{constraint}` cannot be solved for at this configuration (the constraints' matrix is singular, pivot {pivot:e}): choose another speed with `removes`"
+    )]
+    SingularConstraints {
+        /// The constraint whose pivot vanished.
+        constraint: String,
+        /// The speed it removes.
+        speed: String,
+        /// The pivot, relative to the largest coefficient.
+        pivot: Real,
+    },
 }
 
 /// The velocity of a body point, split as in [P, Eq. (2)].
@@ -155,7 +168,12 @@ pub fn update_positions(
             parent * joint.placement
         };
         // Body pose and motion subspace.
-        let (pose, s) = joint_motion(&joint.kind, &frame, &jq);
+        let (pose, mut s) = joint_motion(&joint.kind, &frame, &jq);
+        if model.has_body_frame_speeds(JointId(i)) {
+            // Body-frame speeds: translations along the body's own axes.
+            s[0] = Twist::translation_along(pose.transform_vector(Vec2::X));
+            s[1] = Twist::translation_along(pose.transform_vector(Vec2::Y));
+        }
         let body = &model.bodies()[i];
         let com = pose.transform_point(body.com);
         data.joint_q[i] = jq;
@@ -165,6 +183,9 @@ pub fn update_positions(
         data.body_pose[i] = pose;
         data.body_com[i] = com;
         data.body_inertia[i] = Inertia::from_body(body.mass, com, body.inertia);
+    }
+    if !model.is_holonomic() {
+        crate::constraints::update_map(model, data)?;
     }
     Ok(())
 }
@@ -226,6 +247,17 @@ pub fn update_velocities(
     u: &[Real],
 ) -> Result<(), KinematicsError> {
     check_len("u", model.nu(), u.len())?;
+    if model.is_holonomic() {
+        tree_velocities(model, data, u);
+    } else {
+        crate::constraints::tree_speeds(model, data, u);
+    }
+    Ok(())
+}
+
+/// The velocity pass of [`update_velocities`] at the tree speeds `v` `[nv]`.
+pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
+    let u = v_tree;
     let t = data.time;
     for (i, joint) in model.joints().iter().enumerate() {
         // Joint rates.
@@ -274,9 +306,15 @@ pub fn update_velocities(
                 }
             }
             JointKind::Planar => {
+                // Joint-frame axes turn with the parent, body-frame axes with the body.
+                let turns = if model.has_body_frame_speeds(JointId(i)) {
+                    v
+                } else {
+                    vp
+                };
                 let o = data.body_pose[i].translation;
-                c += vp.cross_motion(&s[0]) * qd[0];
-                c += vp.cross_motion(&s[1]) * qd[1];
+                c += turns.cross_motion(&s[0]) * qd[0];
+                c += turns.cross_motion(&s[1]) * qd[1];
                 c += Twist::new(0.0, -perp(v.velocity_at(o))) * qd[2];
             }
             JointKind::Fixed => {}
@@ -286,7 +324,6 @@ pub fn update_velocities(
         data.body_twist_remainder[i] = v_rem;
         data.body_accel_vp[i] = c;
     }
-    Ok(())
 }
 
 /// [`update_positions`] then [`update_velocities`].
@@ -373,8 +410,15 @@ pub fn point_jacobian(
         if let Some(s) = model.q_index(JointId(b)) {
             for k in 0..joint.kind.ndof() {
                 let col = data.subspace[b][k].velocity_at(r);
-                jac[(0, s + k)] = col.x;
-                jac[(1, s + k)] = col.y;
+                if model.is_holonomic() {
+                    jac[(0, s + k)] = col.x;
+                    jac[(1, s + k)] = col.y;
+                } else {
+                    crate::constraints::add_tree_column(model, data, s + k, |i, w| {
+                        jac[(0, i)] += w * col.x;
+                        jac[(1, i)] += w * col.y;
+                    });
+                }
             }
         }
         if joint.is_absolute() {
@@ -405,7 +449,14 @@ pub fn angular_jacobian(
         let joint = &model.joints()[b];
         if let Some(s) = model.q_index(JointId(b)) {
             for k in 0..joint.kind.ndof() {
-                row[s + k] = data.subspace[b][k].w;
+                let w = data.subspace[b][k].w;
+                if model.is_holonomic() {
+                    row[s + k] = w;
+                } else {
+                    crate::constraints::add_tree_column(model, data, s + k, |i, x| {
+                        row[i] += x * w;
+                    });
+                }
             }
         }
         if joint.is_absolute() {

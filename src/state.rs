@@ -17,7 +17,9 @@ pub struct State {
     /// Generalized coordinates `q` `[nq]` (m, rad), in the order of
     /// [`Model::coordinates`].
     pub q: DVector<Real>,
-    /// Generalized speeds `u = q̇` `[nu]` (m/s, rad/s).
+    /// Generalized speeds `u` `[nu]` (m/s, rad/s), in the order of [`Model::speeds`]:
+    /// `u = q̇` for a holonomic model, `q̇ = A(q, t) u + b(q, t)` with nonholonomic
+    /// constraints.
     pub u: DVector<Real>,
 }
 
@@ -112,6 +114,37 @@ pub struct Data {
     /// Generalized forces of the last inverse dynamics `M u̇ + h` `[nu]` (N, N·m). Written
     /// by `dynamics::inverse_dynamics`.
     pub tau: DVector<Real>,
+    /// The world point `P` and blade normal `n` of each nonholonomic constraint `[m]`.
+    /// Written by `update_positions`.
+    pub constraint_frame: Vec<(Vec2, Vec2)>,
+    /// The constraint rows `C` `[m × nv]`: `n · v^P = C v + c`. Written by
+    /// `update_positions`.
+    pub constraint_rows: DMatrix<Real>,
+    /// The LU factors of `C_d` (the columns of the removed speeds) `[m × m]`, with partial
+    /// pivoting: `P C_d = L U` packed, `constraint_pivots` the row order. Written by
+    /// `update_positions`.
+    pub constraint_lu: DMatrix<Real>,
+    /// The row permutation of `constraint_lu`.
+    pub constraint_pivots: Vec<usize>,
+    /// `S` `[nv × nu]`: `v = S u + s` (the rows of the removed speeds `−C_d⁻¹ C_i`, the
+    /// others unit rows). Written by `update_positions`.
+    pub speed_map: DMatrix<Real>,
+    /// The tree speeds `v` `[nv]` of the last `update_velocities` (m/s, rad/s); this and
+    /// the fields below are empty for a holonomic model, whose tree speeds are `u`.
+    pub tree_speed: DVector<Real>,
+    /// The tree accelerations when `u̇ = 0`, `v̇₀` `[nv]`: zero but for the removed speeds,
+    /// `−C_d⁻¹ γ`. Written by `dynamics::bias_forces`.
+    pub tree_accel0: DVector<Real>,
+    /// The tree accelerations `v̇ = S u̇ + v̇₀` `[nv]` of the last forward dynamics.
+    pub tree_accel: DVector<Real>,
+    /// The tree's mass matrix `M_v` `[nv × nv]` (nonholonomic models; `M = Sᵀ M_v S`).
+    pub mass_tree: DMatrix<Real>,
+    /// `M_v S` `[nv × nu]`, scratch of `mass_matrix`.
+    pub mass_map: DMatrix<Real>,
+    /// The tree's bias or inverse-dynamics forces `[nv]`, scratch.
+    pub force_tree: DVector<Real>,
+    /// Scratch `[m]`.
+    pub constraint_scratch: DVector<Real>,
 }
 
 impl Data {
@@ -119,6 +152,14 @@ impl Data {
     pub fn new(model: &Model) -> Self {
         let nb = model.nbody();
         let nu = model.nu();
+        let nv = model.nv();
+        let m = model.constraints().len();
+        // The tree-level matrices only where the speeds differ from the tree's.
+        let (nh, nh_u) = if model.is_holonomic() {
+            (0, 0)
+        } else {
+            (nv, nu)
+        };
         Data {
             time: 0.0,
             joint_q: vec![[0.0; 3]; nb],
@@ -141,6 +182,18 @@ impl Data {
             bias: DVector::zeros(nu),
             udot: DVector::zeros(nu),
             tau: DVector::zeros(nu),
+            constraint_frame: vec![(Vec2::ZERO, Vec2::ZERO); m],
+            constraint_rows: DMatrix::zeros(m, nv),
+            constraint_lu: DMatrix::zeros(m, m),
+            constraint_pivots: (0..m).collect(),
+            speed_map: DMatrix::zeros(nh, nh_u),
+            tree_speed: DVector::zeros(nh),
+            tree_accel0: DVector::zeros(nh),
+            tree_accel: DVector::zeros(nh),
+            mass_tree: DMatrix::zeros(nh, nh),
+            mass_map: DMatrix::zeros(nh, nh_u),
+            force_tree: DVector::zeros(nh),
+            constraint_scratch: DVector::zeros(m),
         }
     }
 }

@@ -3,10 +3,11 @@
 
 use crate::math::Vec2;
 
+use super::speeds::choose_speeds;
 use super::validate::validate;
 use super::{
-    Body, BodyId, Collider, ColliderId, ContactPair, Coordinate, Joint, JointId, JointKind,
-    Material, Model, ModelError,
+    Body, BodyId, Collider, ColliderId, Constraint, ContactPair, Coordinate, Joint, JointId,
+    JointKind, Material, Model, ModelError,
 };
 
 /// How a pair of colliders is treated, beyond the default rule.
@@ -50,6 +51,7 @@ pub struct ModelBuilder {
     gravity: Vec2,
     default_material: Material,
     rules: Vec<PairRule>,
+    constraints: Vec<Constraint>,
 }
 
 impl Default for ModelBuilder {
@@ -69,6 +71,7 @@ impl ModelBuilder {
             gravity: Vec2::ZERO,
             default_material: Material::default(),
             rules: Vec::new(),
+            constraints: Vec::new(),
         }
     }
 
@@ -96,6 +99,18 @@ impl ModelBuilder {
     pub fn add_collider(&mut self, collider: Collider) -> ColliderId {
         self.colliders.push(collider);
         ColliderId(self.colliders.len() - 1)
+    }
+
+    /// Adds a nonholonomic constraint (a knife edge or a wheel on a body). Its direction is
+    /// normalized by [`ModelBuilder::build`] (a zero direction is an error).
+    pub fn add_constraint(&mut self, constraint: Constraint) -> usize {
+        self.constraints.push(constraint);
+        self.constraints.len() - 1
+    }
+
+    /// The constraints added so far.
+    pub fn constraints(&self) -> &[Constraint] {
+        &self.constraints
     }
 
     /// Lets the colliders `a` and `b` touch (also for a parent and its child), with
@@ -134,8 +149,22 @@ impl ModelBuilder {
         validate(&self.bodies, &self.joints, &self.colliders, self.gravity)?;
         let pairs = self.contact_pairs()?;
         let (coordinates, joint_q) = coordinates(&self.joints);
+        let speeds = choose_speeds(
+            &self.bodies,
+            &self.joints,
+            &mut self.constraints,
+            &coordinates,
+            &joint_q,
+        )?;
         Ok(Model {
             nq: coordinates.len(),
+            constraints: self.constraints,
+            tree_speeds: speeds.tree,
+            speeds: speeds.independent_speeds,
+            roles: speeds.roles,
+            independent: speeds.independent,
+            dependent: speeds.dependent,
+            body_frame: speeds.body_frame,
             bodies: self.bodies,
             joints: self.joints,
             colliders: self.colliders,

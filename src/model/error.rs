@@ -127,4 +127,14 @@ pub enum ModelError {
         /// The allowed range.
         range: &'static str,
     },
+    /// A nonholonomic constraint that cannot be built.
+    #[error("constraint `{constraint}`: {reason}")]
+    BadConstraint {
+        /// The constraint.
+        constraint: String,
+        /// The body that carries it (empty if unknown).
+        body: String,
+        /// Why.
+        reason: String,
+    },
 }

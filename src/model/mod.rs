@@ -7,7 +7,10 @@
 //! Body `i` is attached to its parent (a body added before it, or the world) by joint `i`
 //! ([`JointKind`]: revolute, prismatic, translation, planar or fixed). The joint
 //! coordinates of the free joints, in body order, are the generalized coordinates `q`
-//! (`nq` of them), and the generalized speeds are their rates, `u = q̇` (`nu = nq`). A
+//! (`nq` of them), and the generalized speeds are their rates, `u = q̇` (`nu = nq`),
+//! unless the model has nonholonomic [`Constraint`]s: then `nu = nq − m` speeds remain and
+//! `q̇ = A(q, t) u + b(q, t)` (see [`Constraint`]'s module, the simple nonholonomic systems
+//! of [P, Sect. 2]). A
 //! joint with a [`PrescribedMotion`] contributes no coordinate: its position, rate and
 //! acceleration are known functions of time, and its rate produces the *remainder*
 //! velocities of [P, Eq. (2)]:
@@ -26,14 +29,17 @@
 mod body;
 mod builder;
 mod collider;
+mod constraint;
 mod error;
 mod joint;
 pub mod spatial;
+mod speeds;
 mod validate;
 
 pub use body::Body;
 pub use builder::ModelBuilder;
 pub use collider::{Collider, ContactPair, Material};
+pub use constraint::{Constraint, ConstraintKind, Speed, SpeedRole};
 pub use error::ModelError;
 pub use joint::{Joint, JointForce, JointKind, PrescribedMotion};
 
@@ -110,6 +116,20 @@ pub struct Model {
     /// fixed.
     joint_q: Vec<Option<usize>>,
     nq: usize,
+    /// The nonholonomic constraints (empty for a holonomic model).
+    constraints: Vec<Constraint>,
+    /// The tree speeds `v` `[nv = nq]`, in the order of `q`.
+    tree_speeds: Vec<Speed>,
+    /// The generalized speeds `u` `[nu]`: the tree speeds no constraint removes.
+    speeds: Vec<Speed>,
+    /// For each tree speed, its role.
+    roles: Vec<SpeedRole>,
+    /// The tree-speed index of each `u`.
+    independent: Vec<usize>,
+    /// The tree-speed index each constraint removes, in constraint order.
+    dependent: Vec<usize>,
+    /// For each joint: its planar speeds are in the body's frame.
+    body_frame: Vec<bool>,
 }
 
 impl Model {
@@ -124,10 +144,68 @@ impl Model {
         self.nq
     }
 
-    /// Number of generalized speeds `nu` (`= nq`, since `u = q̇`).
+    /// Number of generalized speeds `nu` (`p` of [P, Sect. 2]): `nq` less one per
+    /// nonholonomic constraint (`= nq`, `u = q̇`, for a holonomic model).
     #[inline]
     pub fn nu(&self) -> usize {
+        self.independent.len()
+    }
+
+    /// Number of tree speeds `nv` (`= nq`): the joint rates, before the constraints remove
+    /// some (see [`constraint`](crate::model::Constraint)).
+    #[inline]
+    pub fn nv(&self) -> usize {
         self.nq
+    }
+
+    /// `true` if the model has no nonholonomic constraint: `u = v = q̇`.
+    #[inline]
+    pub fn is_holonomic(&self) -> bool {
+        self.constraints.is_empty()
+    }
+
+    /// The nonholonomic constraints.
+    #[inline]
+    pub fn constraints(&self) -> &[Constraint] {
+        &self.constraints
+    }
+
+    /// The generalized speeds `u`, in order (for a holonomic model, one per coordinate
+    /// with the coordinate's name).
+    #[inline]
+    pub fn speeds(&self) -> &[Speed] {
+        &self.speeds
+    }
+
+    /// The tree speeds `v` (one per coordinate), the removed ones included.
+    #[inline]
+    pub fn tree_speeds(&self) -> &[Speed] {
+        &self.tree_speeds
+    }
+
+    /// The role of each tree speed.
+    #[inline]
+    pub fn speed_roles(&self) -> &[SpeedRole] {
+        &self.roles
+    }
+
+    /// The tree-speed index of each generalized speed.
+    #[inline]
+    pub fn independent_speeds(&self) -> &[usize] {
+        &self.independent
+    }
+
+    /// The tree-speed index each constraint removes, in constraint order.
+    #[inline]
+    pub fn dependent_speeds(&self) -> &[usize] {
+        &self.dependent
+    }
+
+    /// `true` if the speeds of joint `id` are in its body's frame (a planar joint whose
+    /// body carries a constraint).
+    #[inline]
+    pub fn has_body_frame_speeds(&self, id: JointId) -> bool {
+        self.body_frame.get(id.0).copied().unwrap_or(false)
     }
 
     /// Number of bodies (and of joints).

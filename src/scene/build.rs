@@ -10,13 +10,17 @@ use toml::Spanned;
 use crate::contact::{ContactError, signed_gap};
 use crate::kinematics::update_positions;
 use crate::math::{Real, Vec2};
-use crate::model::{Body, BodyId, Collider, ColliderId, Material, Model, ModelBuilder, ModelError};
+use crate::model::{
+    Body, BodyId, Collider, ColliderId, Constraint, Material, Model, ModelBuilder, ModelError,
+};
 use crate::settings::{IntegratorSettings, Settings};
 use crate::state::{Data, State};
 
 use super::SceneError;
 use super::error::Locator;
-use super::format::{BodySpec, ContactSpec, Pair, RunSpec, SceneFile, Two};
+use super::format::{
+    BodySpec, ConstraintSpec, ConstraintType, ContactSpec, Pair, RunSpec, SceneFile, Two,
+};
 use super::ranges;
 use super::units::{Kind, Quantity};
 
@@ -57,12 +61,16 @@ pub(super) struct Builder<'a> {
     pub(super) names: HashMap<String, Named>,
     pub(super) q0: Vec<Real>,
     pub(super) u0: Vec<Real>,
+    /// For each coordinate, whether the file gives its speed.
+    pub(super) u_given: Vec<bool>,
     /// For each collider, the span its errors point at.
     pub(super) collider_spans: Vec<Range<usize>>,
     /// For each body, the span its errors point at (its joint).
     pub(super) body_spans: Vec<Range<usize>>,
     /// For each body, its colliders.
     pub(super) body_colliders: HashMap<BodyId, Vec<ColliderId>>,
+    /// For each nonholonomic constraint, the span its errors point at (its name or type).
+    pub(super) constraint_spans: Vec<Range<usize>>,
 }
 
 pub(super) fn build(
@@ -95,9 +103,11 @@ pub(super) fn build(
         names: HashMap::new(),
         q0: Vec::new(),
         u0: Vec::new(),
+        u_given: Vec::new(),
         collider_spans: Vec::new(),
         body_spans: Vec::new(),
         body_colliders: HashMap::new(),
+        constraint_spans: Vec::new(),
     };
     let gravity = match &file.gravity {
         Some(g) => b.pair(g)?,
@@ -118,19 +128,34 @@ pub(super) fn build(
         model,
         q0,
         u0,
+        u_given,
         collider_spans,
         body_spans,
+        constraint_spans,
         ..
     } = b;
-    let model = model
-        .build()
-        .map_err(|e| locate_model_error(e, &file, loc))?;
+    let constraint_names: Vec<String> = (model.constraints().iter())
+        .map(|c| c.name.clone())
+        .collect();
+    let model = model.build().map_err(|e| match &e {
+        ModelError::BadConstraint { constraint, .. } => {
+            let k = constraint_names.iter().position(|n| n == constraint);
+            let span = k.map_or(file.name.span(), |k| constraint_spans[k].clone());
+            loc.at(span, e.to_string())
+        }
+        _ => locate_model_error(e, &file, loc),
+    })?;
     if let (None, Some(pair)) = (&file.contact, model.pairs().first()) {
         return Err(loc.at(
             collider_spans[pair.a.index()].clone(),
             "the scene has contact pairs but no [contact] table: give at least `e` and `mu`",
         ));
     }
+    let u0 = if model.is_holonomic() {
+        u0
+    } else {
+        initial_speeds(&model, &q0, &u0, &u_given, &constraint_spans, loc)?
+    };
     let initial = State::new(0.0, DVector::from_vec(q0), DVector::from_vec(u0));
     let data = positions(&model, &initial).map_err(|e| loc.at(0..0, e))?;
     check_reach(&model, &data, &body_spans, loc)?;
@@ -143,6 +168,61 @@ pub(super) fn build(
         settings,
         overlap_tolerance: tolerance,
     })
+}
+
+/// The generalized speeds of the initial coordinate rates `q̇₀` the joints give (their
+/// `vx`, `vy`, `rate`, …): the speeds no constraint removes are taken as given (zero when
+/// absent), the removed ones follow from the constraints; a removed speed that the file
+/// gives must agree with them (a blade that starts moving sideways is an error at its
+/// constraint, with both values).
+fn initial_speeds(
+    model: &Model,
+    q0: &[Real],
+    qdot0: &[Real],
+    given: &[bool],
+    spans: &[Range<usize>],
+    loc: &Locator<'_>,
+) -> Result<Vec<Real>, SceneError> {
+    let mut data = Data::new(model);
+    update_positions(model, &mut data, 0.0, q0).map_err(|e| {
+        let span = match &e {
+            crate::kinematics::KinematicsError::SingularConstraints { constraint, .. } => {
+                (model.constraints().iter())
+                    .position(|c| &c.name == constraint)
+                    .map_or(0..0, |k| spans[k].clone())
+            }
+            _ => 0..0,
+        };
+        loc.at(span, format!("at the initial state: {e}"))
+    })?;
+    let v0 = crate::constraints::tree_speeds_from_rates(model, &data, qdot0);
+    let u: Vec<Real> = (model.independent_speeds().iter())
+        .map(|&i| v0[i])
+        .collect();
+    crate::kinematics::update_velocities(model, &mut data, &u)
+        .map_err(|e| loc.at(0..0, format!("at the initial state: {e}")))?;
+    let v = &data.tree_speed;
+    let scale = (v0.iter().chain(v.iter())).fold(0.0 as Real, |m, x| m.max(x.abs()));
+    for (k, &d) in model.dependent_speeds().iter().enumerate() {
+        if given[d] && (v0[d] - v[d]).abs() > 1e-9 * scale {
+            let (c, speed) = (&model.constraints()[k], &model.tree_speeds()[d]);
+            let unit = if speed.is_angle { "rad/s" } else { "m/s" };
+            return Err(loc.at(
+                spans[k].clone(),
+                format!(
+                    "the initial velocity breaks constraint `{}`: it removes the speed `{}`, \
+                     which it makes {} {unit}, and the joint's initial velocity gives {} \
+                     {unit}; leave that speed out (give the body-frame speeds `vx_body`, \
+                     `vy_body` and `rate` that the constraints leave) or make them agree",
+                    c.name,
+                    speed.name,
+                    ranges::number(v[d]),
+                    ranges::number(v0[d]),
+                ),
+            ));
+        }
+    }
+    Ok(u)
 }
 
 /// A model error located at the body, joint, shape or obstacle it names (its `name`
@@ -449,7 +529,7 @@ impl Builder<'_> {
             },
             _ => None,
         };
-        let (joint, q, u) = self.joint(&name, s.joint.get_ref(), parent)?;
+        let (joint, q, u, given) = self.joint(&name, s.joint.get_ref(), parent)?;
         let id = self
             .model
             .add_body(Body::new(&name, mass, com, inertia), joint);
@@ -457,6 +537,7 @@ impl Builder<'_> {
         self.name(&s.name, Named::Body(id))?;
         self.q0.extend(q);
         self.u0.extend(u);
+        self.u_given.extend(given);
         for (k, shape) in s.shape.iter().enumerate() {
             let collider_name = match &shape.get_ref().name {
                 Some(n) => {
@@ -485,6 +566,51 @@ impl Builder<'_> {
             let span = shape.get_ref().kind.span();
             self.add_collider(Collider::new(collider_name, Some(id), geometry, pose), span);
         }
+        for (k, c) in s.constraint.iter().enumerate() {
+            self.constraint(c, id, &name, k, s.constraint.len())?;
+        }
+        Ok(())
+    }
+
+    /// `[[body.constraint]]` of body `id`: its `k`-th of `count`.
+    fn constraint(
+        &mut self,
+        spec: &Spanned<ConstraintSpec>,
+        id: BodyId,
+        body: &str,
+        k: usize,
+        count: usize,
+    ) -> Result<(), SceneError> {
+        let c = spec.get_ref();
+        let name = match &c.name {
+            Some(n) => {
+                if let Some(why) = ranges::bad_name(n.get_ref()) {
+                    return Err(self.err(n.span(), why));
+                }
+                n.get_ref().clone()
+            }
+            None if count == 1 => body.to_owned(),
+            None => format!("{body}/{k}"),
+        };
+        let name_span = c.name.as_ref().map_or(c.kind.span(), |n| n.span());
+        if self.model.constraints().iter().any(|o| o.name == name) {
+            return Err(self.err(
+                name_span,
+                format!("the constraint name `{name}` is used twice"),
+            ));
+        }
+        let point = self.pair_or(&c.at, Vec2::ZERO)?;
+        let angle = self.quantity_or(&c.direction, Kind::Angle, 0.0)?;
+        let direction = Vec2::new(angle.cos(), angle.sin());
+        let mut constraint = match c.kind.get_ref() {
+            ConstraintType::KnifeEdge => Constraint::knife_edge(name, id, point, direction),
+            ConstraintType::Wheel => Constraint::wheel(name, id, point, direction),
+        };
+        if let Some(r) = &c.removes {
+            constraint = constraint.removing(r.get_ref().clone());
+        }
+        self.model.add_constraint(constraint);
+        self.constraint_spans.push(name_span);
         Ok(())
     }
 

@@ -70,6 +70,7 @@ impl Builder<'_> {
             );
             self.q0.push(if i == 1 { angle } else { 0.0 });
             self.u0.push(if i == 1 { rate } else { 0.0 });
+            self.u_given.push(i == 1);
             parent = Some(id);
         }
         Ok(())

@@ -158,6 +158,32 @@ pub(super) struct BodySpec {
     pub joint: Spanned<JointSpec>,
     #[serde(default)]
     pub shape: Vec<Spanned<ShapeSpec>>,
+    #[serde(default)]
+    pub constraint: Vec<Spanned<ConstraintSpec>>,
+}
+
+/// The nonholonomic constraint types.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum ConstraintType {
+    KnifeEdge,
+    Wheel,
+}
+
+/// `[[body.constraint]]`: a knife edge or a wheel that does not slip sideways.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ConstraintSpec {
+    #[serde(rename = "type")]
+    pub kind: Spanned<ConstraintType>,
+    #[serde(default)]
+    pub name: Option<Spanned<String>>,
+    #[serde(default)]
+    pub at: Option<Spanned<Pair>>,
+    #[serde(default)]
+    pub direction: Option<Spanned<Quantity>>,
+    #[serde(default)]
+    pub removes: Option<Spanned<String>>,
 }
 
 /// The joint types.
@@ -203,6 +229,10 @@ pub(super) struct JointSpec {
     pub vx: Option<Spanned<Quantity>>,
     #[serde(default)]
     pub vy: Option<Spanned<Quantity>>,
+    #[serde(default)]
+    pub vx_body: Option<Spanned<Quantity>>,
+    #[serde(default)]
+    pub vy_body: Option<Spanned<Quantity>>,
     #[serde(default)]
     pub stiffness: Option<Spanned<Quantity>>,
     #[serde(default)]

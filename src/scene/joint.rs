@@ -13,14 +13,20 @@ use super::format::{DriveSpec, JointSpec, JointType};
 use super::ranges;
 use super::units::{Kind, Quantity};
 
+/// A joint read from a file: the joint, its initial coordinates and coordinate rates, and
+/// for each of its speeds whether the file gives it.
+pub(super) type ReadJoint = (Joint, Vec<Real>, Vec<Real>, Vec<bool>);
+
 impl Builder<'_> {
-    /// The joint, its initial coordinates and speeds.
+    /// The joint, its initial coordinates and coordinate rates, and for each of its
+    /// speeds whether the file gives it (a speed that a constraint removes and the file
+    /// does not give is computed from the others; one it gives must agree).
     pub(super) fn joint(
         &self,
         name: &str,
         s: &JointSpec,
         parent: Option<BodyId>,
-    ) -> Result<(Joint, Vec<Real>, Vec<Real>), SceneError> {
+    ) -> Result<ReadJoint, SceneError> {
         use Kind::{Angle, AngularRate, Plain};
         let ty = *s.kind.get_ref();
         self.allowed_joint_fields(s, ty)?;
@@ -63,19 +69,39 @@ impl Builder<'_> {
                     self.quantity_or(&s.vy, Plain, 0.0)?,
                 ],
             ),
-            JointType::Planar => (
-                JointKind::Planar,
-                vec![
-                    self.quantity_or(&s.x, Plain, 0.0)?,
-                    self.quantity_or(&s.y, Plain, 0.0)?,
-                    self.quantity_or(&s.angle, Angle, 0.0)?,
-                ],
-                vec![
-                    self.quantity_or(&s.vx, Plain, 0.0)?,
-                    self.quantity_or(&s.vy, Plain, 0.0)?,
-                    self.quantity_or(&s.rate, AngularRate, 0.0)?,
-                ],
-            ),
+            JointType::Planar => {
+                let angle = self.quantity_or(&s.angle, Angle, 0.0)?;
+                let (vx, vy) = if s.vx_body.is_some() || s.vy_body.is_some() {
+                    if let Some(v) = s.vx.as_ref().or(s.vy.as_ref()) {
+                        return Err(self.err(
+                            v.span(),
+                            "give the initial velocity either along the joint's axes (`vx`, \
+                             `vy`) or along the body's (`vx_body`, `vy_body`), not both",
+                        ));
+                    }
+                    // (ẋ, ẏ) = R(θ₀) (vx_body, vy_body).
+                    let body = Vec2::new(
+                        self.quantity_or(&s.vx_body, Plain, 0.0)?,
+                        self.quantity_or(&s.vy_body, Plain, 0.0)?,
+                    );
+                    let v = Vec2::from_angle(angle).rotate(body);
+                    (v.x, v.y)
+                } else {
+                    (
+                        self.quantity_or(&s.vx, Plain, 0.0)?,
+                        self.quantity_or(&s.vy, Plain, 0.0)?,
+                    )
+                };
+                (
+                    JointKind::Planar,
+                    vec![
+                        self.quantity_or(&s.x, Plain, 0.0)?,
+                        self.quantity_or(&s.y, Plain, 0.0)?,
+                        angle,
+                    ],
+                    vec![vx, vy, self.quantity_or(&s.rate, AngularRate, 0.0)?],
+                )
+            }
             JointType::Fixed => (JointKind::Fixed, vec![], vec![]),
         };
         let mut joint = Joint::new(name, kind, parent, placement);
@@ -96,9 +122,24 @@ impl Builder<'_> {
         };
         if let Some(drive) = &s.drive {
             joint.drive = Some(self.drive(drive, q[0], coordinate, rate)?);
-            return Ok((joint, vec![], vec![]));
+            return Ok((joint, vec![], vec![], vec![]));
         }
-        Ok((joint, q, u))
+        let (vx, vy) = (
+            s.vx.is_some() || s.vy.is_some(),
+            s.vx.is_some() || s.vy.is_some(),
+        );
+        let given = match ty {
+            JointType::Revolute => vec![s.rate.is_some()],
+            JointType::Prismatic => vec![s.speed.is_some()],
+            JointType::Translation => vec![vx, vy],
+            JointType::Planar => vec![
+                vx || s.vx_body.is_some(),
+                vy || s.vy_body.is_some(),
+                s.rate.is_some(),
+            ],
+            JointType::Fixed => vec![],
+        };
+        Ok((joint, q, u, given))
     }
 
     pub(super) fn non_negative(&self, v: &Option<Spanned<Quantity>>) -> Result<Real, SceneError> {
@@ -143,7 +184,7 @@ impl Builder<'_> {
         ty: JointType,
     ) -> Result<(), SceneError> {
         let span = |v: &Option<Spanned<Quantity>>| v.as_ref().map(|v| v.span());
-        let present: [(&str, Option<Range<usize>>); 16] = [
+        let present: [(&str, Option<Range<usize>>); 18] = [
             ("absolute", s.absolute.as_ref().map(|v| v.span())),
             ("axis", s.axis.as_ref().map(|v| v.span())),
             ("angle", span(&s.angle)),
@@ -154,6 +195,8 @@ impl Builder<'_> {
             ("y", span(&s.y)),
             ("vx", span(&s.vx)),
             ("vy", span(&s.vy)),
+            ("vx_body", span(&s.vx_body)),
+            ("vy_body", span(&s.vy_body)),
             ("stiffness", span(&s.stiffness)),
             ("rest", span(&s.rest)),
             ("damping", span(&s.damping)),
@@ -183,7 +226,7 @@ impl Builder<'_> {
                 "drive",
             ],
             JointType::Translation => &["x", "y", "vx", "vy"],
-            JointType::Planar => &["x", "y", "angle", "vx", "vy", "rate"],
+            JointType::Planar => &["x", "y", "angle", "vx", "vy", "vx_body", "vy_body", "rate"],
             JointType::Fixed => &[],
         };
         let tyname = format!("{ty:?}").to_lowercase();

@@ -99,7 +99,7 @@ impl Simulation<'_> {
         event: Option<&Event>,
         observer: &mut dyn Observer,
     ) -> Result<(bool, Option<StopReason>), SimError> {
-        let n = self.model.nq();
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let mut changed = false;
         let mut impacts_here = 0usize;
         let mut painleve_resolved = false;
@@ -118,7 +118,7 @@ impl Simulation<'_> {
                 let single = approaching.len() == 1
                     && (impacts_here == 0
                         || self.points_below(&touching, self.scales.v_tiny).len() == 1);
-                let u_before = y[n..2 * n].to_vec();
+                let u_before = y[n..nqu].to_vec();
                 // Once an accumulation ended at this instant, the impacts in cascade that
                 // follow (the other end of a rod landing flat) are plastic too.
                 let mut events = self.impact_round(
@@ -137,7 +137,7 @@ impl Simulation<'_> {
                     let slow = self.slow_separations(t, y, &after)?;
                     if !slow.is_empty() {
                         self.note_accumulations(t, &slow);
-                        y[n..2 * n].copy_from_slice(&u_before);
+                        y[n..nqu].copy_from_slice(&u_before);
                         let single = single && slow.iter().all(|p| p.pair == approaching[0].pair);
                         events = self.impact_round(
                             t,
@@ -158,7 +158,7 @@ impl Simulation<'_> {
                                 .copied()
                                 .collect();
                             let points = self.points_below(&held, self.scales.v_rest);
-                            let (q, u) = y[..2 * n].split_at_mut(n);
+                            let (q, u) = y[..nqu].split_at_mut(n);
                             let mut closing =
                                 self.map
                                     .close(self.model, &points, self.scales.v_rest, t, q, u)?;
@@ -275,8 +275,8 @@ impl Simulation<'_> {
     /// Every contact point within the closed-contact tolerance at `(t, y)`, with its
     /// velocities.
     fn touching(&mut self, t: Real, y: &[Real]) -> Result<Vec<Touch>, SimError> {
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let (q, u) = (&y[..n], &y[n..nqu]);
         update_positions(self.model, &mut self.sampler, t, q).map_err(|e| e.at(t))?;
         update_velocities(self.model, &mut self.sampler, u).map_err(|e| e.at(t))?;
         let mut ws = ManifoldWorkspace::default();
@@ -380,13 +380,13 @@ impl Simulation<'_> {
         plastic: bool,
         observer: &mut dyn Observer,
     ) -> Result<Vec<ImpactEvent>, SimError> {
-        let n = self.model.nq();
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let plastic_material = |m: Material| if plastic { Material { e: 0.0, ..m } } else { m };
         let mut points = self.points_below(touching, self.scales.v_tiny);
         for p in &mut points {
             p.2 = plastic_material(p.2);
         }
-        let (q, u) = y[..2 * n].split_at_mut(n);
+        let (q, u) = y[..nqu].split_at_mut(n);
         let mut events: Vec<ImpactEvent> = if single {
             let p = approaching[0];
             let material = plastic_material(self.material(p.pair));
@@ -581,8 +581,8 @@ impl Simulation<'_> {
         candidates: &[Candidate],
         v_slip: Real,
     ) -> Result<Selection, SimError> {
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let (q, u) = (&y[..n], &y[n..nqu]);
         forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
         let sel = (self.system.persistent).select(
             self.model,
@@ -915,8 +915,8 @@ impl Simulation<'_> {
         y: &mut [Real],
         observer: &mut dyn Observer,
     ) -> Result<(), SimError> {
-        let n = self.model.nq();
-        let (q, u) = y[..2 * n].split_at_mut(n);
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let (q, u) = y[..nqu].split_at_mut(n);
         let material = self.material(point.pair);
         let floor = Some(0.5 * self.scales.v_tiny);
         let ev = self.map.apply_at(

@@ -126,12 +126,18 @@ pub enum SimError {
         value: Real,
     },
     /// The initial state does not fit the model.
-    #[error("the initial state has {got} coordinates or speeds, the model {expected}")]
+    #[error(
+        "the initial state has {got_q} coordinates and {got_u} speeds, the model {expected_q} and {expected_u}"
+    )]
     InitialState {
         /// `nq` of the model.
-        expected: usize,
-        /// What the state has.
-        got: usize,
+        expected_q: usize,
+        /// `nu` of the model.
+        expected_u: usize,
+        /// The length of the state's `q`.
+        got_q: usize,
+        /// The length of the state's `u`.
+        got_u: usize,
     },
     /// The observer (the log) failed.
     #[error("at t = {t}: the log failed: {message}")]

@@ -111,8 +111,8 @@ impl EventFunctions for GapFunctions<'_> {
 
     fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
         let model = self.model;
-        let n = model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
+        let (n, nqu) = (model.nq(), model.nq() + model.nu());
+        let (q, u) = (&y[..n], &y[n..nqu]);
         // Unarmed functions hold a positive value.
         g.fill(self.scales.length);
         if self.persistent.closed().is_empty() {
@@ -153,10 +153,9 @@ impl EventFunctions for GapFunctions<'_> {
         // at its samples, not a dip below zero and back between two of them (which would
         // take a difference of the constrained dynamics at every search iteration).
         let model = self.model;
-        let n = model.nq();
+        let (n, nqu) = (model.nq(), model.nq() + model.nu());
         update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
-        update_velocities(model, &mut self.data, &y[n..2 * n])
-            .map_err(|e| Nested::from(e.at(t)))?;
+        update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
         g_dot.fill(0.0);
         for k in 0..model.pairs().len() {
             let pair = PairId(k);

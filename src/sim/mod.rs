@@ -234,17 +234,19 @@ impl<'m> Simulation<'m> {
 
     /// Stage `start`: the initial state, energy and sample.
     fn start(&mut self, initial: &State, observer: &mut dyn Observer) -> Result<(), SimError> {
-        let n = self.model.nq();
-        if initial.q.len() != n || initial.u.len() != n {
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        if initial.q.len() != n || initial.u.len() != nqu - n {
             return Err(SimError::InitialState {
-                expected: n,
-                got: initial.q.len().min(initial.u.len()),
+                expected_q: n,
+                expected_u: nqu - n,
+                got_q: initial.q.len(),
+                got_u: initial.u.len(),
             });
         }
         let t0 = initial.t;
         self.y.fill(0.0);
         self.y[..n].copy_from_slice(initial.q.as_slice());
-        self.y[n..2 * n].copy_from_slice(initial.u.as_slice());
+        self.y[n..nqu].copy_from_slice(initial.u.as_slice());
         self.stepper.start(&mut self.system, t0, &self.y)?;
         self.audit.initial = energy(
             self.model,
@@ -327,14 +329,14 @@ impl<'m> Simulation<'m> {
     /// near them samples no farther apart than an eighth of the smaller shape's radius of
     /// relative motion, and an eighth of a half-turn of rotation.
     fn cap_for_spin(&mut self) -> Result<(), SimError> {
-        let n = self.model.nq();
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
         let mut cap = self.h_max_base;
         let samples = (self.locator_samples + 1) as Real;
         {
             let y = self.stepper.y();
             update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
-            update_velocities(self.model, &mut self.sampler, &y[n..2 * n]).map_err(|e| e.at(t))?;
+            update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
         }
         let colliders = self.model.colliders();
         // The speed bound of the points of a shape, its radius and its rotation rate. The
@@ -483,8 +485,8 @@ impl<'m> Simulation<'m> {
         if !observer.wants_samples() {
             return Ok(());
         }
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let (q, u) = (&y[..n], &y[n..nqu]);
         let e = energy(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
         for (k, g) in self.gap_values.iter_mut().enumerate() {
             *g = crate::contact::signed_gap(self.model, &self.sampler, PairId(k), Real::INFINITY)
@@ -525,18 +527,18 @@ impl<'m> Simulation<'m> {
 
     /// Stage `finish`: the final sample, the energy audit and the counters.
     fn finish(&mut self, stop: StopReason, observer: &mut dyn Observer) -> RunSummary {
-        let n = self.model.nq();
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
         let y = self.stepper.y().to_vec();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
+        let (q, u) = (&y[..n], &y[n..nqu]);
         self.audit.end = energy(self.model, &mut self.sampler, t, q, u).unwrap_or(Energy {
             kinetic: Real::NAN,
             potential: Real::NAN,
         });
-        self.audit.damping_work = y[2 * n];
-        self.audit.applied_work = y[2 * n + 1];
-        self.audit.drive_work = y[2 * n + 2];
-        self.audit.contact_work = y[2 * n + 3];
+        self.audit.damping_work = y[nqu];
+        self.audit.applied_work = y[nqu + 1];
+        self.audit.drive_work = y[nqu + 2];
+        self.audit.contact_work = y[nqu + 3];
         let level = match stop {
             StopReason::Failed(_) => Level::Error,
             StopReason::Interrupted { .. } => Level::Warning,

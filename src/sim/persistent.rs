@@ -28,7 +28,7 @@ use super::{AtTime, Scales, SimError};
 use crate::contact::{
     ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent, contact_points, frame_at,
 };
-use crate::dynamics::solve_mass;
+use crate::dynamics::{coordinate_rates, solve_mass};
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
 use crate::math::{Pose, Real, Vec2};
@@ -123,6 +123,8 @@ pub struct Persistent {
     eval: PointScratch,
     /// The perturbed coordinates of the central differences.
     q_fd: Vec<Real>,
+    /// The coordinate rates `q̇ = A u + b` the differences move along.
+    qdot_fd: Vec<Real>,
     /// One column of `M⁻¹ Jᵀ`.
     column: Vec<Real>,
     /// The velocity-product terms `c` (2k).
@@ -154,6 +156,7 @@ impl Persistent {
             data_fd: Data::new(model),
             eval: PointScratch::new(model),
             q_fd: vec![0.0; model.nq()],
+            qdot_fd: vec![0.0; model.nq()],
             column: vec![0.0; nu],
             c: DVector::zeros(0),
             jac: DMatrix::zeros(0, nu),
@@ -209,9 +212,16 @@ impl Persistent {
         let eps = 1e-3 * self.scales.length / self.scales.speed;
         // v at s = +ε, −ε, +2ε, −2ε.
         let mut v = [(0.0, 0.0); 4];
+        if model.is_holonomic() {
+            self.qdot_fd.copy_from_slice(u);
+        } else {
+            update_positions(model, &mut self.data_fd, t, q).map_err(|e| e.at(t))?;
+            update_velocities(model, &mut self.data_fd, u).map_err(|e| e.at(t))?;
+            coordinate_rates(model, &self.data_fd, u, &mut self.qdot_fd);
+        }
         for (k, s) in [eps, -eps, 2.0 * eps, -2.0 * eps].into_iter().enumerate() {
-            for ((qf, qi), ui) in self.q_fd.iter_mut().zip(q).zip(u) {
-                *qf = qi + s * ui;
+            for ((qf, qi), qd) in self.q_fd.iter_mut().zip(q).zip(&self.qdot_fd) {
+                *qf = qi + s * qd;
             }
             let ts = t + s;
             update_positions(model, &mut self.data_fd, ts, &self.q_fd).map_err(|e| e.at(t))?;

@@ -2,7 +2,7 @@
 
 use super::persistent::Persistent;
 use super::{AtTime, Nested, Scales};
-use crate::dynamics::{forward_dynamics, power};
+use crate::dynamics::{coordinate_rates, forward_dynamics, power};
 use crate::integrate::OdeSystem;
 use crate::math::Real;
 use crate::model::Model;
@@ -11,7 +11,7 @@ use crate::state::Data;
 /// The first-order system the integrator advances between impacts:
 ///
 /// ```text
-/// y = [q; u; w],   ẏ = [u; M(q)⁻¹ (τ − h(t, q, u) + Fᵀ λ); P]
+/// y = [q; u; w],   ẏ = [A u + b; M(q)⁻¹ (τ − h(t, q, u) + Fᵀ λ); P]
 /// ```
 ///
 /// where `Fᵀ λ` are the forces of the closed contact points in persistent contact
@@ -44,27 +44,27 @@ impl OdeSystem for MotionSystem<'_> {
     type Error = Nested;
 
     fn dim(&self) -> usize {
-        2 * self.model.nq() + WORKS
+        self.model.nq() + self.model.nu() + WORKS
     }
 
     /// `q` and `u`: the works are quadratures of them, outside the step-size control.
     fn controlled(&self) -> usize {
-        2 * self.model.nq()
+        self.model.nq() + self.model.nu()
     }
 
     fn rhs(&mut self, t: Real, y: &[Real], dy: &mut [Real]) -> Result<(), Nested> {
-        let n = self.model.nq();
-        let (q, u) = (&y[..n], &y[n..2 * n]);
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let (q, u) = (&y[..n], &y[n..nqu]);
         forward_dynamics(self.model, &mut self.data, t, q, u).map_err(|e| Nested::from(e.at(t)))?;
         self.persistent
             .accelerate(self.model, &mut self.data, (t, q, u))?;
-        dy[..n].copy_from_slice(u);
-        dy[n..2 * n].copy_from_slice(self.data.udot.as_slice());
+        coordinate_rates(self.model, &self.data, u, &mut dy[..n]);
+        dy[n..nqu].copy_from_slice(self.data.udot.as_slice());
         let p = power(self.model, &mut self.data);
-        dy[2 * n] = p.damping;
-        dy[2 * n + 1] = p.applied;
-        dy[2 * n + 2] = p.drives;
-        dy[2 * n + 3] = if self.persistent.closed().is_empty() {
+        dy[nqu] = p.damping;
+        dy[nqu + 1] = p.applied;
+        dy[nqu + 2] = p.drives;
+        dy[nqu + 3] = if self.persistent.closed().is_empty() {
             0.0
         } else {
             self.persistent.power()

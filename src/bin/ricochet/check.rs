@@ -1,6 +1,8 @@
 //! `ricochet check SCENE`: validates a scene and prints, as JSON, its coordinate names, the
-//! initial `q` and `u`, the mass matrix at the initial state and the energies (see
-//! `DESIGN.md`), with the contact pairs and their initial gaps and the run settings.
+//! initial `q` and `u` (with the speeds' names), the mass matrix at the initial state and
+//! the energies (see `DESIGN.md`), with the contact pairs and their initial gaps and the
+//! run settings; for a nonholonomic scene, its constraints and the kinematic equations
+//! `q̇ = A u + b` at the initial state.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,7 +11,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use ricochet::contact::signed_gap;
 use ricochet::dynamics::Energy;
-use ricochet::dynamics::{energy, factor_mass_matrix, mass_matrix};
+use ricochet::dynamics::{energy, factor_mass_matrix, kinematic_equations, mass_matrix};
 use ricochet::math::Real;
 use ricochet::scene;
 use ricochet::settings::Settings;
@@ -33,12 +35,42 @@ struct Report<'a> {
     units: Vec<&'static str>,
     t: Real,
     q: &'a [Real],
+    /// The generalized speeds' names (the coordinates' for a holonomic model).
+    speeds: Vec<&'a str>,
+    speed_units: Vec<&'static str>,
     u: &'a [Real],
+    /// Nonholonomic models: the constraints and the kinematic equations `q̇ = A u + b`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    constraints: Option<Vec<ConstraintReport<'a>>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    kinematic_equations: Option<KinematicReport>,
     mass_matrix: Vec<Vec<Real>>,
     energy: EnergyReport,
     bodies: Vec<&'a str>,
     pairs: Vec<PairReport<'a>>,
     settings: &'a Settings,
+}
+
+#[derive(Serialize)]
+struct ConstraintReport<'a> {
+    name: &'a str,
+    #[serde(rename = "type")]
+    kind: &'static str,
+    body: &'a str,
+    /// The blade's point (m, body frame).
+    at: [Real; 2],
+    /// The blade's direction (unit, body frame).
+    direction: [Real; 2],
+    /// The speed it removes.
+    removes: &'a str,
+}
+
+/// `q̇ = A(q, t) u + b(q, t)` at the initial state: `a` row by row (one row per
+/// coordinate, one column per speed).
+#[derive(Serialize)]
+struct KinematicReport {
+    a: Vec<Vec<Real>>,
+    b: Vec<Real>,
 }
 
 #[derive(Serialize)]
@@ -100,6 +132,37 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         });
     }
 
+    let (constraints, kinematics) = if model.is_holonomic() {
+        (None, None)
+    } else {
+        let (a, b) = kinematic_equations(model, &mut data, state.t, q).with_context(|| {
+            format!(
+                "{}: kinematic equations at the initial state",
+                args.scene.display()
+            )
+        })?;
+        let report = (model.constraints().iter())
+            .enumerate()
+            .map(|(k, c)| ConstraintReport {
+                name: &c.name,
+                kind: c.kind.name(),
+                body: &model.bodies()[c.body.index()].name,
+                at: [c.point.x, c.point.y],
+                direction: [c.direction.x, c.direction.y],
+                removes: &model.tree_speeds()[model.dependent_speeds()[k]].name,
+            })
+            .collect();
+        let rows = (0..model.nq())
+            .map(|r| (0..model.nu()).map(|c| a[(r, c)]).collect())
+            .collect();
+        (
+            Some(report),
+            Some(KinematicReport {
+                a: rows,
+                b: b.iter().copied().collect(),
+            }),
+        )
+    };
     let coordinates = model.coordinates();
     let out = Report {
         scene: &scene.name,
@@ -112,7 +175,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             .collect(),
         t: state.t,
         q,
+        speeds: model.speeds().iter().map(|s| s.name.as_str()).collect(),
+        speed_units: (model.speeds().iter())
+            .map(|s| if s.is_angle { "rad/s" } else { "m/s" })
+            .collect(),
         u,
+        constraints,
+        kinematic_equations: kinematics,
         mass_matrix: mass,
         energy: e.into(),
         bodies: model.bodies().iter().map(|b| b.name.as_str()).collect(),

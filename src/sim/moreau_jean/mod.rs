@@ -91,10 +91,13 @@ mod contacts;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::PairMode;
-use crate::dynamics::{Energy, energy, forward_dynamics, forward_dynamics_with, power};
+use crate::dynamics::{
+    Energy, coordinate_rates, energy, forward_dynamics, forward_dynamics_with, power,
+};
 use crate::impact::{
     Coefficients, CollisionType, ContactVelocity, Law, Outcome, Phases, energy_change,
 };
+use crate::kinematics::forward_kinematics;
 use crate::math::Real;
 use crate::model::{Model, PairId};
 use crate::pgs::{PgsSettings, PgsStatus};
@@ -102,7 +105,7 @@ use crate::settings::Settings;
 use crate::state::{Data, State};
 
 use super::{
-    EnergyAudit, ImpactCause, ImpactEvent, Level, MaterialOverride, Observer, RunCounters,
+    AtTime, EnergyAudit, ImpactCause, ImpactEvent, Level, MaterialOverride, Observer, RunCounters,
     RunSummary, Sample, Scales, SimError, StopReason,
 };
 use contacts::{ContactProblem, Solved};
@@ -369,10 +372,12 @@ impl<'m> MoreauJean<'m> {
     /// Stage `start`: the state, the step grid, the initial energy and sample.
     fn start(&mut self, initial: &State, observer: &mut dyn Observer) -> Result<(), SimError> {
         let (nq, nu) = (self.model.nq(), self.model.nu());
-        if initial.q.len() != nq || initial.u.len() != nu || nq != nu {
+        if initial.q.len() != nq || initial.u.len() != nu {
             return Err(SimError::InitialState {
-                expected: nq,
-                got: initial.q.len().min(initial.u.len()),
+                expected_q: nq,
+                expected_u: nu,
+                got_q: initial.q.len(),
+                got_u: initial.u.len(),
             });
         }
         let t0 = initial.t;
@@ -469,8 +474,18 @@ impl<'m> MoreauJean<'m> {
         let theta = self.mj.theta;
         let t_m = t + theta * h;
         // θ-point and free velocity: u_free = u_k + h M(q_θ)⁻¹ (τ − h)(t_θ, q_θ, u_k).
-        for ((qm, q), u) in self.q_m.iter_mut().zip(&self.states.q).zip(&self.states.u) {
-            *qm = q + theta * h * u;
+        if self.model.is_holonomic() {
+            for ((qm, q), u) in self.q_m.iter_mut().zip(&self.states.q).zip(&self.states.u) {
+                *qm = q + theta * h * u;
+            }
+        } else {
+            // q_θ = q_k + θ h (A u_k + b)(t_k, q_k).
+            let (q, u) = (&self.states.q, &self.states.u);
+            forward_kinematics(self.model, &mut self.data, t, q, u).map_err(|e| e.at(t))?;
+            coordinate_rates(self.model, &self.data, u, &mut self.q_m);
+            for (qm, q) in self.q_m.iter_mut().zip(q) {
+                *qm = q + theta * h * *qm;
+            }
         }
         forward_dynamics(self.model, &mut self.data, t_m, &self.q_m, &self.states.u)
             .map_err(|e| SimError::at(t_m, e))?;
@@ -493,8 +508,27 @@ impl<'m> MoreauJean<'m> {
         self.states.u_next.copy_from_slice(&self.scratch_u);
         self.contacts.apply(&mut self.states.u_next);
         let s = &mut self.states;
-        for (((qn, q), u), un) in (s.q_next.iter_mut()).zip(&s.q).zip(&s.u).zip(&s.u_next) {
-            *qn = q + h * ((1.0 - theta) * u + theta * un);
+        if self.model.is_holonomic() {
+            for (((qn, q), u), un) in (s.q_next.iter_mut()).zip(&s.q).zip(&s.u).zip(&s.u_next) {
+                *qn = q + h * ((1.0 - theta) * u + theta * un);
+            }
+        } else {
+            // q_{k+1} = q_k + h (A ū + b)(t_θ, q_θ), ū = (1 − θ) u_k + θ u_{k+1}.
+            for ((ub, u), un) in self.scratch_u.iter_mut().zip(&s.u).zip(&s.u_next) {
+                *ub = (1.0 - theta) * u + theta * un;
+            }
+            forward_kinematics(
+                self.model,
+                &mut self.sampler,
+                t_m,
+                &self.q_m,
+                &self.scratch_u,
+            )
+            .map_err(|e| e.at(t_m))?;
+            coordinate_rates(self.model, &self.sampler, &self.scratch_u, &mut s.q_next);
+            for (qn, q) in s.q_next.iter_mut().zip(&s.q) {
+                *qn = q + h * *qn;
+            }
         }
         s.t_next = t_next;
         self.contacts.end_velocities(&self.states.u_next);
