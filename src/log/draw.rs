@@ -242,6 +242,43 @@ pub fn skeleton_entity(
     Ok(entity)
 }
 
+/// A nonholonomic constraint drawn on its body: the entity `constraint/<name>` in frame
+/// `body_<body>` (frame-locked), a dark bar of `length` (m) along the blade's `direction`
+/// through its point `at` (body frame) — a knife edge thin, a wheel as wide as a tyre
+/// (a fifth of its length) — raised above the body's shapes so that it shows on them.
+pub fn constraint_entity(
+    t: f64,
+    (name, body): (&str, &str),
+    (at, direction): (Vector, Vector),
+    wheel: bool,
+    length: f64,
+    style: &DrawStyle,
+) -> Result<SceneEntity, LogError> {
+    let mut entity = entity(t, body_frame(body), format!("constraint/{name}"), true)?;
+    let half = 0.5 * length * direction;
+    let width = if wheel { 0.2 * length } else { 0.04 * length };
+    let mut pose = planar(&bar(at - half, at + half), 0.0);
+    if let Some(p) = pose.position.as_mut() {
+        p.z = style.line_z() + 0.5 * style.depth;
+    }
+    entity.cubes.push(CubePrimitive {
+        pose: Some(pose),
+        size: Some(vector3(length, width, style.depth)),
+        color: Some(Color {
+            r: 0.1,
+            g: 0.1,
+            b: 0.1,
+            a: 0.9,
+        }),
+    });
+    entity.metadata.push(key_value("constraint", name));
+    entity.metadata.push(key_value(
+        "type",
+        if wheel { "wheel" } else { "knife_edge" },
+    ));
+    Ok(entity)
+}
+
 /// The entity `world/<name>` in frame `world` (frame-locked, shown until deleted), drawing
 /// the static `shapes` of an obstacle at simulated time `t` (s).
 ///

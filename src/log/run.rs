@@ -322,6 +322,25 @@ fn geometry(model: &Model, t: Real) -> Result<SceneUpdate, LogError> {
             )?);
         }
     }
+    // The blades and wheels: a third of their body's size, a tenth of a metre without
+    // shapes.
+    for c in model.constraints() {
+        let body = &model.bodies()[c.body.index()];
+        let size = (model.colliders().iter())
+            .filter(|s| s.body == Some(c.body))
+            .map(|s| 2.0 * s.shape.0.compute_aabb(&s.pose).half_extents().max_element())
+            .fold(0.0, Real::max);
+        let length = if size > 0.0 { size / 3.0 } else { 0.1 };
+        let wheel = c.kind == crate::model::ConstraintKind::Wheel;
+        entities.push(draw::constraint_entity(
+            t,
+            (&c.name, &body.name),
+            (c.point, c.direction),
+            wheel,
+            length,
+            &style,
+        )?);
+    }
     for c in model.colliders().iter().filter(|c| c.body.is_none()) {
         let shape = ShapeDrawing {
             shape: &*c.shape.0,

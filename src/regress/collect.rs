@@ -61,11 +61,11 @@ impl Collector {
             Ok(Value::Object(map)) => Some(map),
             _ => None,
         };
+        let (coordinates, speeds) = super::summary::names(&scene.model);
         let parts = Parts {
             scene: Some(SceneId::new(&scene.name, &scene.text)),
-            coordinates: (scene.model.coordinates().iter())
-                .map(|c| c.name.clone())
-                .collect(),
+            coordinates,
+            speeds,
             settings: settings_map,
             audit: Some(Audit::of_run(summary)),
             max_drift: settings.max_drift,

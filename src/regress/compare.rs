@@ -258,6 +258,11 @@ pub fn compare(a: &Summary, b: &Summary, tol: &Tolerances) -> Comparison {
         } else {
             a.coordinates.clone()
         },
+        speeds: if a.speeds.is_empty() {
+            b.speeds.clone()
+        } else {
+            a.speeds.clone()
+        },
     };
     // Two passes over the same pairs of values: the fields' scales, then the comparison.
     for measuring in [true, false] {
@@ -317,6 +322,8 @@ struct Comparer {
     firsts: Vec<(Real, u64, Difference)>,
     seq: u64,
     coordinates: Vec<String>,
+    /// The speeds' names when they are not the coordinates' (a nonholonomic scene).
+    speeds: Vec<String>,
 }
 
 impl Comparer {
@@ -655,9 +662,15 @@ impl Comparer {
             self.exact(q.0, at, &field, json!(a.len()), json!(b.len()));
             return;
         }
+        let speeds = name == "u" && !self.speeds.is_empty();
         for (k, (x, y)) in a.iter().zip(b).enumerate() {
-            let field = match self.coordinates.get(k) {
-                Some(c) if a.len() == self.coordinates.len() => format!("{name}[{k}] ({c})"),
+            let names = if speeds {
+                &self.speeds
+            } else {
+                &self.coordinates
+            };
+            let field = match names.get(k) {
+                Some(c) if a.len() == names.len() => format!("{name}[{k}] ({c})"),
                 _ => format!("{name}[{k}]"),
             };
             self.number(q, at, &field, *x, *y);

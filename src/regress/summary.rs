@@ -145,6 +145,10 @@ pub struct Summary {
     /// unknown: a log whose scene text no longer loads).
     #[serde(default)]
     pub coordinates: Vec<String>,
+    /// The names of the generalized speeds, in the order of `u`, when they are not the
+    /// coordinates' (a nonholonomic scene); absent otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub speeds: Vec<String>,
     /// The run settings as the log's `settings` record holds them: `t_end`,
     /// `output_rate`, `integrator {method, rtol, atol, dt, h_max}`, `max_drift` (if any)
     /// and `material_overrides {law, e, mu}`.
@@ -172,9 +176,24 @@ pub struct Summary {
 pub(crate) struct Parts {
     pub scene: Option<SceneId>,
     pub coordinates: Vec<String>,
+    pub speeds: Vec<String>,
     pub settings: Option<Map<String, Value>>,
     pub audit: Option<Audit>,
     pub max_drift: Option<Real>,
+}
+
+/// The names of a model's coordinates, and of its speeds when they are not the
+/// coordinates' (a nonholonomic model; empty otherwise).
+pub(crate) fn names(model: &crate::model::Model) -> (Vec<String>, Vec<String>) {
+    let coordinates = (model.coordinates().iter())
+        .map(|c| c.name.clone())
+        .collect();
+    let speeds = if model.is_holonomic() {
+        Vec::new()
+    } else {
+        (model.speeds().iter()).map(|s| s.name.clone()).collect()
+    };
+    (coordinates, speeds)
 }
 
 /// The largest `K + |V|` of the samples seen, for the energy scale (J).
@@ -204,6 +223,7 @@ impl Summary {
             ricochet: env!("CARGO_PKG_VERSION").to_owned(),
             scene: parts.scene,
             coordinates: parts.coordinates,
+            speeds: parts.speeds,
             settings: parts.settings,
             audit: parts.audit,
             drift,
@@ -235,17 +255,14 @@ impl Summary {
                 stride: 0,
             },
         };
-        let coordinates = (log.scene.as_ref())
+        let model = (log.scene.as_ref())
             .and_then(|s| crate::scene::load_str(&s.text, format!("{}.toml", s.name)).ok())
-            .map(|s| {
-                (s.model.coordinates().iter())
-                    .map(|c| c.name.clone())
-                    .collect()
-            })
-            .unwrap_or_default();
+            .map(|s| s.model);
+        let (coordinates, speeds) = model.as_ref().map(names).unwrap_or_default();
         let parts = Parts {
             scene: (log.scene.as_ref()).map(|s| SceneId::new(&s.name, &s.text)),
             coordinates,
+            speeds,
             settings: log.settings.clone(),
             audit: log.audit.clone(),
             max_drift: settings.and_then(|s| s.max_drift),

@@ -77,7 +77,7 @@ pub enum SpecError {
     },
     /// `q0.`/`u0.` with a name that is no coordinate of the scene.
     #[error(
-        "bad parameter `{param}`: the scene {scene} has no coordinate `{name}` (it has: {known})"
+        "bad parameter `{param}`: the scene {scene} has no {} `{name}` (it has: {known})", if param.starts_with("u0.") { "generalized speed" } else { "coordinate" }
     )]
     UnknownCoordinate {
         /// The parameter, `q0.<name>` or `u0.<name>`.

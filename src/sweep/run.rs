@@ -49,17 +49,27 @@ impl<'s> Sweep<'s> {
     /// The sweep of `grid` over `scene`. Errors: a `q0.`/`u0.` parameter that names no
     /// coordinate of the scene's model.
     pub fn new(scene: &'s Scene, grid: Grid) -> Result<Sweep<'s>, SpecError> {
+        // `q0.` names a coordinate, `u0.` a generalized speed (the same names for a
+        // holonomic scene; a nonholonomic one has its own, see `Model::speeds`).
+        let names = |speeds: bool| -> Vec<String> {
+            if speeds {
+                (scene.model.speeds().iter())
+                    .map(|s| s.name.clone())
+                    .collect()
+            } else {
+                coordinate_names(scene)
+            }
+        };
         let coordinate = |param: &Param, name: &str| {
-            scene
-                .model
-                .coordinates()
+            let known = names(matches!(param, Param::U0(_)));
+            known
                 .iter()
-                .position(|c| c.name == name)
+                .position(|c| c == name)
                 .ok_or_else(|| SpecError::UnknownCoordinate {
                     param: param.to_string(),
                     name: name.to_owned(),
                     scene: scene.name.clone(),
-                    known: coordinate_names(scene).join(", "),
+                    known: known.join(", "),
                 })
         };
         let targets = grid
