@@ -197,6 +197,13 @@ pub fn mass_matrix(model: &Model, data: &mut Data) {
         tree_mass_matrix(model, data, &mut mass_tree);
         data.mass_map.gemm(1.0, &mass_tree, &data.speed_map, 0.0);
         data.mass.gemm_tr(1.0, &data.speed_map, &data.mass_map, 0.0);
+        // Exactly symmetric: the upper triangle from the lower one.
+        let nu = data.mass.nrows();
+        for c in 1..nu {
+            for r in 0..c {
+                data.mass[(r, c)] = data.mass[(c, r)];
+            }
+        }
         data.mass_tree = mass_tree;
     }
 }

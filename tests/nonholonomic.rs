@@ -109,7 +109,8 @@ fn sleigh_free_motion_matches_its_closed_form() {
         from_scene
     };
     let j = i + m * a * a;
-    let (v0, w0, th0) = (1.0, 2.0, 0.0);
+    let (v0, w0, th0) = (1.0, 2.0, 5.0_f64.to_radians());
+    assert!((scene.initial.q[2] - th0).abs() < 1e-16);
     let e = 0.5 * m * v0 * v0 + 0.5 * j * w0 * w0;
     let big_v = (2.0 * e / m).sqrt();
     let k = m * a / j;
@@ -390,6 +391,10 @@ fn a_sleigh_in_a_box_balances_its_energy_and_keeps_its_blade() {
         text = text.replace("mu = 0.3", &format!("mu = {mu:?}"));
         text = text.replace("output_rate = 200.0", "output_rate = 2000.0");
         text = text.replace("point = [2.5, 0.0]", "point = [1.5, 0.0]");
+        text = text.replace(
+            "x = -0.5, y = 0.2, angle = \"5 deg\"",
+            "x = 0.0, y = 0.0, angle = \"0 deg\"",
+        );
         for (name, point, normal) in [
             ("left", "[-1.5, 0.0]", "[1.0, 0.0]"),
             ("bottom", "[0.0, -1.0]", "[0.0, 1.0]"),
@@ -486,7 +491,7 @@ fn regions_map_from_a_nonholonomic_scene() {
     let (_, q, u, _) = rec.samples.iter().find(|s| s.0 == ev.t).unwrap();
     // The scene started at that state (positions and the two speeds, written exactly).
     let text = scene_text("chaplygin_sleigh").replace(
-        "joint = { type = \"planar\", x = 0.0, y = 0.0, angle = \"0 deg\", vx_body = 1.0, rate = \"2 rad/s\" }",
+        "joint = { type = \"planar\", x = -0.5, y = 0.2, angle = \"5 deg\", vx_body = 1.0, rate = \"2 rad/s\" }",
         &format!(
             "joint = {{ type = \"planar\", x = {:?}, y = {:?}, angle = \"{:?} rad\", vx_body = {:?}, rate = \"{:?} rad/s\" }}",
             q[0], q[1], q[2], u[0], u[1]
@@ -554,4 +559,172 @@ fn regions_map_from_a_nonholonomic_scene() {
         .collect();
     assert!(!svgs.is_empty());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Careless and hostile constraint tables: each error names the file, the line and the
+/// field, and says what to do.
+#[test]
+fn bad_constraints_are_located_errors() {
+    let sleigh = scene_text("chaplygin_sleigh");
+    let wagon = scene_text("wagon_curb");
+    let blade2 = "[[body.constraint]]\ntype = \"knife_edge\"\nname = \"blade2\"\nat = [-0.3, 0.1]\ndirection = \"0 deg\"\n\n[[obstacle]]";
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            sleigh.replace("vx_body = 1.0", "vx = 1.0, vy = 1.0"),
+            "constraint[\"blade\"].name",
+            "the initial velocity breaks constraint `blade`: it removes the speed `sleigh.vy_body`, which it makes 0.6 m/s, and the joint's initial velocity gives 0.909",
+        ),
+        (
+            sleigh.replace(
+                "direction = \"0 deg\"  ",
+                "removes = \"sleigh.nope\"\ndirection = \"0 deg\"  ",
+            ),
+            "constraint[\"blade\"].removes",
+            "no speed is named `sleigh.nope`",
+        ),
+        (
+            sleigh.replacen("[[obstacle]]", blade2, 1),
+            "constraint[\"blade2\"].name",
+            "the blade involves no speed of `sleigh`'s joint that the constraints before it leave",
+        ),
+        (
+            sleigh.replace("direction = \"0 deg\"  ", "direction = 0.0  "),
+            "constraint[\"blade\"].direction",
+            "an angle needs its unit",
+        ),
+        (
+            sleigh.replace("type = \"knife_edge\"", "type = \"skate\""),
+            "constraint[\"blade\"].type",
+            "unknown variant `skate`",
+        ),
+        (
+            sleigh.replace("vx_body = 1.0", "vx_body = 1.0, vx = 0.5"),
+            "joint.vx",
+            "either along the joint's axes",
+        ),
+        (
+            wagon.replace(
+                "at = [-0.06, 0.0]                    # behind",
+                "at = [0.0, 0.0] # at",
+            ),
+            "constraint[\"front_axle\"].name",
+            "name the speed it removes with `removes`",
+        ),
+        (
+            wagon
+                .replace(
+                    "at = [-0.06, 0.0]                    # behind",
+                    "at = [0.0, 0.0] # at",
+                )
+                .replace(
+                    "name = \"front_axle\"",
+                    "name = \"front_axle\"\nremoves = \"wagon.omega\"",
+                )
+                .replace("angle = \"20 deg\" }", "angle = \"90 deg\" }"),
+            "constraint[\"front_axle\"].name",
+            "the speed `wagon.omega` removed by constraint `front_axle` cannot be solved for at this configuration",
+        ),
+        (
+            wagon.replace(
+                "name = \"front_axle\"",
+                "name = \"front_axle\"\nremoves = \"wagon.vy_body\"",
+            ),
+            "constraint[\"front_axle\"].removes",
+            "`wagon.vy_body` is already removed by `rear_axle`",
+        ),
+    ];
+    for (k, (text, field, message)) in cases.iter().enumerate() {
+        let err = ricochet::scene::load_str(text, "bad.toml")
+            .err()
+            .unwrap_or_else(|| {
+                panic!("case {k} loaded");
+            });
+        let shown = err.to_string();
+        println!("{shown}");
+        assert!(shown.starts_with("bad.toml:"), "case {k}: {shown}");
+        assert!(shown.contains(field), "case {k}: {shown}");
+        assert!(shown.contains(message), "case {k}: {shown}");
+    }
+}
+
+/// `ricochet check` prints the speeds, the constraints and `q̇ = A u + b`; the sleigh's
+/// `A` is known by hand: `ẋ = cos θ vx − sin θ (a ω)`, `ẏ = sin θ vx + cos θ (a ω)`,
+/// `θ̇ = ω`.
+#[test]
+fn check_prints_the_speeds_and_the_kinematic_equations() {
+    let dir = std::env::temp_dir().join(format!("ricochet_nh_check_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("sleigh.toml");
+    let theta: Real = 0.7;
+    std::fs::write(
+        &path,
+        scene_text("chaplygin_sleigh")
+            .replace("angle = \"5 deg\"", &format!("angle = \"{theta:?} rad\"")),
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ricochet"))
+        .arg("check")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        v["speeds"],
+        serde_json::json!(["sleigh.vx_body", "sleigh.omega"])
+    );
+    assert_eq!(v["speed_units"], serde_json::json!(["m/s", "rad/s"]));
+    assert_eq!(v["constraints"][0]["removes"], "sleigh.vy_body");
+    assert_eq!(v["constraints"][0]["type"], "knife_edge");
+    let a = &v["kinematic_equations"]["a"];
+    let (s, c, arm) = (theta.sin(), theta.cos(), 0.3);
+    let expected = [[c, -s * arm], [s, c * arm], [0.0, 1.0]];
+    for (r, row) in expected.iter().enumerate() {
+        for (col, x) in row.iter().enumerate() {
+            let got = a[r][col].as_f64().unwrap();
+            assert!(
+                (got - x).abs() < 1e-15,
+                "A[{r}][{col}] = {got}, expected {x}"
+            );
+        }
+    }
+    assert_eq!(v["mass_matrix"].as_array().unwrap().len(), 2);
+    // A holonomic scene prints its coordinates as speeds and no kinematic equations.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ricochet"))
+        .arg("check")
+        .arg(format!(
+            "{}/scenes/falling_rod.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["speeds"], v["coordinates"]);
+    assert!(v.get("kinematic_equations").is_none() && v.get("constraints").is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A sweep over a generalized speed of a nonholonomic scene: `u0.` names the speeds.
+#[test]
+fn sweeps_name_the_generalized_speeds() {
+    use ricochet::sweep::{Grid, ParamSpec, Sweep};
+    let grid_of = |spec: &str| Grid::new(vec![ParamSpec::parse(spec).unwrap()]).unwrap();
+    let scene = load("chaplygin_sleigh");
+    let grid = grid_of("u0.sleigh.omega=0:2:1");
+    let sweep = Sweep::new(&scene, grid).unwrap();
+    for k in 0..3 {
+        let row = sweep.run_point(k);
+        assert!(row.outcome.is_ok(), "{:?}", row.outcome);
+    }
+    let bad = grid_of("u0.sleigh.vy_body=0:1:1");
+    let err = Sweep::new(&scene, bad).unwrap_err().to_string();
+    assert!(
+        err.contains("no generalized speed `sleigh.vy_body`"),
+        "{err}"
+    );
+    assert!(err.contains("sleigh.vx_body, sleigh.omega"), "{err}");
 }

@@ -23,7 +23,7 @@ fn load(name: &str) -> Scene {
     scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
-const SCENES: [(&str, &[&str]); 9] = [
+const SCENES: [(&str, &[&str]); 12] = [
     ("kane_double_pendulum", &["rodA.q", "rodB.q"]),
     ("pendulum_wall", &["pendulum.q"]),
     ("falling_rod", &["rod.x", "rod.y", "rod.theta"]),
@@ -32,6 +32,15 @@ const SCENES: [(&str, &[&str]); 9] = [
     ("rimless_wheel", &["wheel.x", "wheel.y", "wheel.theta"]),
     ("painleve_rod", &["rod.x", "rod.y", "rod.theta"]),
     ("spinning_disk_particle", &["particle.x", "particle.y"]),
+    (
+        "chaplygin_sleigh",
+        &["sleigh.x", "sleigh.y", "sleigh.theta"],
+    ),
+    (
+        "wagon_curb",
+        &["wagon.x", "wagon.y", "wagon.theta", "front.q"],
+    ),
+    ("sled_rock", &["sled.x", "sled.y", "sled.theta"]),
     (
         "chain",
         &[

@@ -173,8 +173,13 @@ pub(super) fn choose_speeds(
             }
         };
         if let Some(other) = tree[index].removed_by {
+            let by = if c.removes.is_some() {
+                "`removes`: "
+            } else {
+                ""
+            };
             let reason = format!(
-                "`{}` is already removed by `{}`",
+                "{by}`{}` is already removed by `{}`",
                 tree[index].name, constraints[other].name
             );
             return Err(bad(c, bodies, reason));

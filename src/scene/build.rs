@@ -69,8 +69,9 @@ pub(super) struct Builder<'a> {
     pub(super) body_spans: Vec<Range<usize>>,
     /// For each body, its colliders.
     pub(super) body_colliders: HashMap<BodyId, Vec<ColliderId>>,
-    /// For each nonholonomic constraint, the span its errors point at (its name or type).
-    pub(super) constraint_spans: Vec<Range<usize>>,
+    /// For each nonholonomic constraint, the span its errors point at (its name or type),
+    /// and its `removes` field's if it has one.
+    pub(super) constraint_spans: Vec<(Range<usize>, Option<Range<usize>>)>,
 }
 
 pub(super) fn build(
@@ -138,9 +139,17 @@ pub(super) fn build(
         .map(|c| c.name.clone())
         .collect();
     let model = model.build().map_err(|e| match &e {
-        ModelError::BadConstraint { constraint, .. } => {
+        ModelError::BadConstraint {
+            constraint, reason, ..
+        } => {
             let k = constraint_names.iter().position(|n| n == constraint);
-            let span = k.map_or(file.name.span(), |k| constraint_spans[k].clone());
+            let span = k.map_or(file.name.span(), |k| {
+                let (name, removes) = &constraint_spans[k];
+                match removes {
+                    Some(r) if reason.starts_with("`removes`") => r.clone(),
+                    _ => name.clone(),
+                }
+            });
             loc.at(span, e.to_string())
         }
         _ => locate_model_error(e, &file, loc),
@@ -154,7 +163,8 @@ pub(super) fn build(
     let u0 = if model.is_holonomic() {
         u0
     } else {
-        initial_speeds(&model, &q0, &u0, &u_given, &constraint_spans, loc)?
+        let spans: Vec<Range<usize>> = constraint_spans.into_iter().map(|(n, _)| n).collect();
+        initial_speeds(&model, &q0, &u0, &u_given, &spans, loc)?
     };
     let initial = State::new(0.0, DVector::from_vec(q0), DVector::from_vec(u0));
     let data = positions(&model, &initial).map_err(|e| loc.at(0..0, e))?;
@@ -610,7 +620,8 @@ impl Builder<'_> {
             constraint = constraint.removing(r.get_ref().clone());
         }
         self.model.add_constraint(constraint);
-        self.constraint_spans.push(name_span);
+        let removes_span = c.removes.as_ref().map(|r| r.span());
+        self.constraint_spans.push((name_span, removes_span));
         Ok(())
     }
 
