@@ -110,7 +110,8 @@ class ImpactResult:
         self.error = np.full(n, None, dtype=object)
         for row, message in columns["errors"]:
             self.error[row] = message
-        self.ok = np.fromiter((e is None for e in self.error), dtype=bool, count=n)
+        # A row has an answer exactly when it has a type (1, 2 or 3).
+        self.ok = columns["type_number"] != 0
 
     def __len__(self) -> int:
         return len(self.i_n)
@@ -174,7 +175,7 @@ def impact(
             raise ValueError(f"{name} must be a number or have the shape ({n},), not {a.shape}")
         return np.ascontiguousarray(np.broadcast_to(a, (n,)))
 
-    laws: str | list[str] = law if isinstance(law, str) else [str(x) for x in law]
+    laws: str | list[str] = law if isinstance(law, str) else list(map(str, law))
     columns = _ricochet._solve_rows(
         np.ascontiguousarray(w),
         np.ascontiguousarray(v_a),

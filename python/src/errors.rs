@@ -35,11 +35,16 @@ pub(crate) fn plain(py: Python<'_>, class: &str, message: impl Into<String>) -> 
 /// `OSError(errno, strerror, filename)`: Python makes it the subclass of the errno
 /// (`FileNotFoundError`, `PermissionError`, …).
 pub(crate) fn os_error(error: &std::io::Error, path: &std::path::Path) -> PyErr {
-    PyOSError::new_err((
-        error.raw_os_error().unwrap_or(0),
-        error.to_string(),
-        path.display().to_string(),
-    ))
+    let code = error.raw_os_error();
+    let text = error.to_string();
+    // Rust's message ends with ` (os error N)`, which Python's `[Errno N]` already says.
+    let text = match code {
+        Some(n) => {
+            (text.strip_suffix(&format!(" (os error {n})"))).map_or(text.clone(), str::to_owned)
+        }
+        None => text,
+    };
+    PyOSError::new_err((code.unwrap_or(0), text, path.display().to_string()))
 }
 
 /// A scene that does not load: `SceneError` with its `path`, `line`, `column`, `field`

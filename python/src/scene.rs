@@ -289,6 +289,10 @@ impl PyScene {
                 );
                 return Err(errors::plain(py, "SimulationError", message));
             }
+            // The log's file cannot be created: the OSError of its path.
+            Ok(Err(RunError::Log(LogError::Create { path, source }))) => {
+                return Err(errors::os_error(&source, &path));
+            }
             Ok(Err(RunError::Log(e))) => {
                 let path = log
                     .as_ref()
