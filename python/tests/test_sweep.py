@@ -96,3 +96,31 @@ def test_bad_parameters_raise() -> None:
         ricochet.sweep(scene, {"mu": [0]}, threads=0)
     with pytest.raises(TypeError):
         ricochet.sweep(scene, {"mu": [object()]})
+
+
+def test_ctrl_c_stops_a_sweep() -> None:
+    import signal
+    import subprocess
+    import sys
+    import textwrap
+    import time
+
+    script = textwrap.dedent(
+        f"""
+        import sys, numpy as np, ricochet
+        print("running", flush=True)
+        try:
+            ricochet.sweep({str(SCENES / "rimless_wheel.toml")!r}, {{"e": np.linspace(0, 1, 50), "t_end": [1e4]}})
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+            sys.exit(3)
+        """
+    )
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    assert child.stdout.readline().strip() == "running"
+    time.sleep(1.0)
+    started = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    out, _ = child.communicate(timeout=60)
+    assert (child.returncode, out.strip()) == (3, "interrupted")
+    assert time.monotonic() - started < 5.0
