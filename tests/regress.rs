@@ -3,7 +3,9 @@
 //!
 //! Checked here:
 //! - the summary of a run (the `Collector`) and the summary of its log are the same
-//!   document, for every bundled scene, and the JSON text reads back bit-exact;
+//!   document, for every bundled scene, and the JSON text reads back bit-exact; with every
+//!   sample kept (`Checkpoints::Every`, the Python package's `Run`), the run's samples
+//!   are the log's `/state` messages, one for one;
 //! - a run compared with itself: every difference exactly zero; with another `e`: the
 //!   first difference is impact #0's `v_s.n`, both values against the closed form of the
 //!   bouncing ball (`v_s = e √(2 g h)`); with one impact less: a count difference at that
@@ -16,10 +18,13 @@
 use std::io::Cursor;
 use std::path::PathBuf;
 
+use ricochet::log::Ending;
 use ricochet::log::{LogOptions, LogWriter, RunLogger};
 use ricochet::math::Real;
 use ricochet::model::Model;
-use ricochet::regress::{Collector, Place, RunOverrides, Summary, Tolerances, compare, run_scene};
+use ricochet::regress::{
+    Checkpoints, Collector, Place, RunOverrides, Summary, Tolerances, compare, run_scene,
+};
 use ricochet::sim::{ImpactEvent, Level, Observer, ObserverError, Sample, Simulation};
 
 #[path = "common/cli.rs"]
@@ -124,6 +129,55 @@ fn a_run_and_its_log_give_the_same_summary_for_every_scene() {
         let back = ricochet::regress::read_run(&path).unwrap();
         assert_eq!(back, from_run, "{name}");
         assert_eq!(back.to_json().unwrap(), text, "{name}");
+    }
+}
+
+/// What the Python package's `Run` rests on: a collector that keeps every sample gives the
+/// summary of the log read with every sample, and those are the run's samples, as many
+/// as the log's `/state` messages.
+#[test]
+fn a_run_keeping_every_sample_is_its_log() {
+    for name in ["kane_double_pendulum", "rocking_block", "bouncing_ball"] {
+        let scene = scene(name);
+        let overrides = ricochet::sim::MaterialOverride::default();
+        let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
+        let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
+        let mut log = RunLogger::new(
+            writer,
+            &scene.model,
+            (&scene.name, &scene.text),
+            (&scene.settings, &overrides),
+            &scene.initial,
+            sim.scales().gap_tol,
+        )
+        .unwrap();
+        let mut collector = Collector::with_rule(&scene.model, Checkpoints::Every);
+        let end = sim.run(
+            &scene.initial,
+            &mut Both {
+                log: &mut log,
+                collector: &mut collector,
+            },
+            None,
+        );
+        let bytes = log.finish(&end).unwrap().into_inner();
+        let from_run = collector.finish(&scene, (&scene.settings, &overrides), &end);
+        let (from_log, read) = Summary::from_log_read(&bytes, None).unwrap();
+        assert_eq!(from_run, from_log, "{name}");
+        assert_eq!(read.ending, Ending::Complete, "{name}");
+        assert_eq!(read.scene.as_ref().unwrap().text, scene.text, "{name}");
+        let samples = from_run.checkpoints.len() as u64;
+        assert_eq!(samples, end.counters.samples, "{name}");
+        assert_eq!(samples, read.count(ricochet::log::Topic::State), "{name}");
+        assert!(samples > 300, "{name}: {samples}");
+        // The output grid, and two samples at each impact instant.
+        let grid = (scene.settings.t_end * scene.settings.output_rate) as u64 + 1;
+        let mut instants: Vec<Real> = from_run.impacts.iter().map(|i| i.t).collect();
+        instants.dedup();
+        assert!(
+            samples >= grid + 2 * instants.len() as u64,
+            "{name}: {samples}"
+        );
     }
 }
 

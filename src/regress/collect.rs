@@ -35,9 +35,16 @@ impl Collector {
     /// A collector for a run of `model` with `settings`, keeping about `checkpoints`
     /// checkpoints ([`Checkpoints::of`]).
     pub fn new(model: &Model, settings: &Settings, checkpoints: u64) -> Collector {
+        Collector::with_rule(model, Checkpoints::of(settings, checkpoints))
+    }
+
+    /// A collector for a run of `model` keeping the checkpoints `rule` says
+    /// ([`Checkpoints::Every`]: every sample, as [`Summary::from_log`] with no count keeps
+    /// those of a log; the Python package's `Run` arrays).
+    pub fn with_rule(model: &Model, rule: Checkpoints) -> Collector {
         Collector {
             names: LedgerNames::new(model),
-            rule: Checkpoints::of(settings, checkpoints),
+            rule,
             impacts: Vec::new(),
             checkpoints: Vec::new(),
             last: None,

@@ -17,7 +17,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use crate::log::{Audit, Energy, ImpactRecord, LogError, StateRecord};
+use crate::log::{Audit, Energy, ImpactRecord, LogError, RunLog, StateRecord};
 use crate::math::Real;
 use crate::settings::Settings;
 
@@ -238,6 +238,12 @@ impl Summary {
     /// `None`. The coordinates' names come from the scene text in the log, when it still
     /// loads.
     pub fn from_log(bytes: &[u8], count: Option<u64>) -> Result<Summary, LogError> {
+        Summary::from_log_read(bytes, count).map(|(summary, _)| summary)
+    }
+
+    /// [`Summary::from_log`], and the log as read (its [`RunLog::ending`]: complete, cut
+    /// short or damaged, the summary holding what was read before; its scene text).
+    pub fn from_log_read(bytes: &[u8], count: Option<u64>) -> Result<(Summary, RunLog), LogError> {
         // Every sample as a snapshot (a few numbers each, not the whole `/state` record).
         let mut samples: Vec<Snapshot> = Vec::new();
         let mut scale = 0.0;
@@ -269,7 +275,8 @@ impl Summary {
         };
         let last = samples.last().cloned();
         samples.retain(|s| rule.keeps(s.t));
-        Ok(Summary::assemble(parts, log.impacts, samples, last, scale))
+        let summary = Summary::assemble(parts, log.impacts.clone(), samples, last, scale);
+        Ok((summary, log))
     }
 
     /// The name of the first number that is not finite, if any. JSON has no NaN nor
