@@ -27,13 +27,11 @@ use std::time::Duration;
 use pyo3::prelude::*;
 use ricochet::model::Model;
 
-/// The names of the generalized speeds `u`, in order: the coordinates' names (`u = q̇`
-/// for the joints of today's models). The one place that names `u`, so that a model whose
-/// speeds have names of their own (`Model::speeds()`) changes this function alone.
+/// The names of the generalized speeds `u`, in order: the coordinates' names for a
+/// holonomic model (`u = q̇`), their own for a nonholonomic one (`Model::speeds`, e.g.
+/// `sleigh.vx_body`, `sleigh.omega`).
 pub(crate) fn speed_names(model: &Model) -> Vec<String> {
-    (model.coordinates().iter())
-        .map(|c| c.name.clone())
-        .collect()
+    (model.speeds().iter()).map(|s| s.name.clone()).collect()
 }
 
 /// The names of the generalized coordinates `q`, in order.

@@ -33,7 +33,9 @@ def messages(path: pathlib.Path, topic: str) -> list[dict]:
         return [json.loads(m.data) for _, _, m in make_reader(f).iter_messages(topics=[topic])]
 
 
-@pytest.mark.parametrize("scene", ["kane_double_pendulum", "bouncing_ball", "rocking_block"])
+@pytest.mark.parametrize(
+    "scene", ["kane_double_pendulum", "bouncing_ball", "rocking_block", "wagon_curb"]
+)
 def test_a_runs_arrays_are_its_logs_messages(tmp_path, scene) -> None:
     log = tmp_path / "run.mcap"
     run = ricochet.Scene.load(SCENES / f"{scene}.toml").run(t_end=1.5, log=str(log))
@@ -249,3 +251,11 @@ def test_a_log_that_cannot_be_created_is_an_os_error(tmp_path) -> None:
         scene.run(log=tmp_path / "no" / "such" / "folder.mcap")
     assert raised.value.filename == str(tmp_path / "no" / "such" / "folder.mcap")
     assert "(os error" not in str(raised.value)
+
+
+def test_a_nonholonomic_scene_names_its_speeds() -> None:
+    """The wagon: four coordinates, two generalized speeds with names of their own."""
+    run = ricochet.Scene.load(SCENES / "wagon_curb.toml").run(t_end=0.5)
+    assert run.coordinates == ["wagon.x", "wagon.y", "wagon.theta", "front.q"]
+    assert run.speeds == ["wagon.vx_body", "wagon.omega"]
+    assert run.q.shape[1] == 4 and run.u.shape[1] == 2
