@@ -728,3 +728,59 @@ fn sweeps_name_the_generalized_speeds() {
     );
     assert!(err.contains("sleigh.vx_body, sleigh.omega"), "{err}");
 }
+
+/// Several blades on one body: a cart whose two axles are both fixed to it (parallel, one
+/// behind the other) keeps one speed, its rolling speed (`omega` is removed by the second
+/// axle): pushed at an angle, it runs straight at constant heading, and gravity along
+/// its axis accelerates it by `g · e₁` exactly as a particle on an inclined line.
+#[test]
+fn two_fixed_axles_leave_one_speed_and_a_straight_line() {
+    let text = r#"
+version = 1
+name = "rigid_cart"
+gravity = [0.0, -2.0]
+[run]
+t_end = 2.0
+[[body]]
+name = "cart"
+mass = 3.0
+inertia = 0.2
+joint = { type = "planar", x = 1.0, y = 2.0, angle = "30 deg", vx_body = 0.5 }
+[[body.constraint]]
+type = "wheel"
+name = "rear"
+at = [-0.3, 0.0]
+[[body.constraint]]
+type = "wheel"
+name = "front"
+at = [0.3, 0.0]
+"#;
+    let scene = ricochet::scene::load_str(text, "rigid_cart.toml").unwrap();
+    let names: Vec<&str> = scene
+        .model
+        .speeds()
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
+    assert_eq!(names, ["cart.vx_body"]);
+    let removed: Vec<&str> = (scene.model.dependent_speeds().iter())
+        .map(|&d| scene.model.tree_speeds()[d].name.as_str())
+        .collect();
+    assert_eq!(removed, ["cart.vy_body", "cart.omega"]);
+    let (rec, summary) = run(&scene, true);
+    assert!(
+        matches!(summary.stop, StopReason::EndTime),
+        "{}",
+        summary.stop
+    );
+    let th: Real = 30.0_f64.to_radians();
+    let along = Vec2::new(th.cos(), th.sin()).dot(Vec2::new(0.0, -2.0));
+    for (t, q, u, _) in &rec.samples {
+        let s = 0.5 * t + 0.5 * along * t * t;
+        let v = 0.5 + along * t;
+        assert!((q[0] - (1.0 + s * th.cos())).abs() < 1e-12, "x at {t}");
+        assert!((q[1] - (2.0 + s * th.sin())).abs() < 1e-12, "y at {t}");
+        assert!((q[2] - th).abs() < 1e-15, "θ at {t}");
+        assert!((u[0] - v).abs() < 1e-12, "v at {t}");
+    }
+}
