@@ -589,7 +589,7 @@ fn bad_input_gives_a_clear_message_and_no_log() {
     fails(
         &dir,
         &["run", ball, "--method", "euler"],
-        &["euler", "dopri5, rk4"],
+        &["euler", "dopri5, dop853, rk4"],
     );
     fails(&dir, &["run", ball, "--rtol", "0"], &["--rtol", "positive"]);
     fails(

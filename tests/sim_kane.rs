@@ -11,6 +11,7 @@ mod common;
 
 use common::{golden, pendulum, printed};
 use ricochet::impact::{self, ImpactProblem, Law};
+use ricochet::integrate::Method;
 use ricochet::sim::{ImpactEvent, MaterialOverride, Recorder, Simulation};
 
 fn scene() -> ricochet::scene::Scene {
@@ -130,4 +131,48 @@ fn the_frame_is_the_papers() {
         (pt.x - tip.0).abs() < 1e-14 && (pt.y - tip.1).abs() < 1e-14,
         "{pt:?}"
     );
+}
+
+/// The scene for 5 s (11 impacts, the accumulation, sliding, sticking) with `method` at
+/// `rtol` (atol = rtol / 100), without a log: the right-hand sides it took and its
+/// integration drift relative to the initial energy.
+fn work_and_drift(method: Method, rtol: f64) -> (u64, f64, u64) {
+    let mut scene = scene();
+    scene.settings.t_end = 5.0;
+    scene.settings.output_rate = 0.0;
+    scene.settings.integrator.method = method;
+    scene.settings.integrator.rtol = rtol;
+    scene.settings.integrator.atol = 1e-2 * rtol;
+    let mut sim =
+        Simulation::new(&scene.model, &scene.settings, MaterialOverride::default()).unwrap();
+    let summary = sim.run(&scene.initial, &mut Recorder::default(), None);
+    assert_eq!(summary.stop.name(), "t_end", "{method}");
+    let audit = &summary.audit;
+    let drift = (audit.drift() / audit.initial.total()).abs();
+    (summary.counters.rhs_evals, drift, summary.counters.impacts)
+}
+
+/// Issue 16: DOP853 against DOPRI5 on this pendulum. At rtol 1e-10 the two take about
+/// the same number of right-hand sides (DOP853's steps are bounded by the scene's
+/// h_max = 0.1 s and by the events, 15 evaluations each with its dense output), and DOP853's
+/// energy drift is more than 100 times smaller; at rtol 1e-12 it needs at most 0.6 times
+/// DOPRI5's right-hand sides. The same impacts in every run.
+#[test]
+fn dop853_against_dopri5_on_the_pendulum() {
+    for rtol in [1e-10, 1e-12] {
+        let (n5, d5, i5) = work_and_drift(Method::Dopri5, rtol);
+        let (n8, d8, i8) = work_and_drift(Method::Dop853, rtol);
+        println!(
+            "rtol {rtol:.0e}: dopri5 {n5} rhs, drift {d5:.1e}; dop853 {n8} rhs, drift {d8:.1e} \
+             ({:.2} of dopri5's rhs)",
+            n8 as f64 / n5 as f64
+        );
+        assert_eq!(i5, i8, "rtol {rtol:e}: impacts");
+        if rtol == 1e-10 {
+            assert!(n8 as f64 <= 1.1 * n5 as f64, "rtol {rtol:e}: {n8} vs {n5}");
+            assert!(d8 * 100.0 <= d5, "rtol {rtol:e}: drift {d8:e} vs {d5:e}");
+        } else {
+            assert!(n8 as f64 <= 0.6 * n5 as f64, "rtol {rtol:e}: {n8} vs {n5}");
+        }
+    }
 }

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::problem::{ContactVelocity, ImpactMatrix};
-use super::scale::{Exponents, ldexp};
+use super::scale::Rescale;
 use crate::math::Real;
 
 /// The coefficients that decide the type of a collision [P, Eqs. (24), (34)–(36)], in the
@@ -39,6 +39,7 @@ impl Coefficients {
     /// `g = μ m_tt − m_nt`, `h = m_nn − μ m_nt`, `p = μ m_tt + m_nt`, `q = m_nn + μ m_nt`,
     /// `Δ = m_nn m_tt − m_nt²`. Identities (used by the tests): `g + p = 2μ m_tt`,
     /// `h + q = 2 m_nn`, `g q + h p = 2μΔ` [P, Eq. (37)].
+    #[inline]
     pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
         Self {
             g: mu * w.tt - w.nt,
@@ -54,15 +55,16 @@ impl Coefficients {
     /// The coefficients of the problem `(s W, c v^A)` from those of `(W, v^A)`, with the
     /// powers of two of [`Scale::exponents`](super::scale::Scale::exponents): g, h, p, q
     /// scale by `s`, `Δ` by `s²`, the velocities by `c`.
-    pub(super) fn scaled(&self, k: &Exponents) -> Self {
+    #[inline]
+    pub(super) fn scaled<R: Rescale>(&self, k: &R) -> Self {
         Self {
-            g: ldexp(self.g, k.coefficient),
-            h: ldexp(self.h, k.coefficient),
-            p: ldexp(self.p, k.coefficient),
-            q: ldexp(self.q, k.coefficient),
-            det: ldexp(self.det, k.det),
-            v_n: ldexp(self.v_n, k.velocity),
-            v_t: ldexp(self.v_t, k.velocity),
+            g: k.coefficient(self.g),
+            h: k.coefficient(self.h),
+            p: k.coefficient(self.p),
+            q: k.coefficient(self.q),
+            det: k.det(self.det),
+            v_n: k.velocity(self.v_n),
+            v_t: k.velocity(self.v_t),
         }
     }
 
@@ -87,6 +89,7 @@ impl Coefficients {
     /// `h + q = 2 m_nn > 0` and `g q + h p = 2μΔ ≥ 0`. A zero is counted as positive: by
     /// [P, Comment g] the equal signs can be added to the inequalities of the table and
     /// the solution stays the same on either side.
+    #[inline]
     pub fn sign_case(&self) -> SignCase {
         if self.g < 0.0 {
             SignCase::Five

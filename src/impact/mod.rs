@@ -51,7 +51,6 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::math::Real;
-use scale::Scale;
 
 /// The hypothesis that ends the collision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -165,11 +164,17 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 /// `scale.rs`), so that it holds over the whole range of finite doubles. An answer beyond
 /// that range is [`ImpactError::OutOfRange`].
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
-    problem.validate()?;
-    let scale = Scale::of(&problem.w, problem.v_a);
-    let unit = scale.down(problem);
+    let (scale, unit) = problem.at_order_one()?;
     match solve_at_order_one(law, &unit) {
-        Ok(out) => scale.up(out),
+        Ok(mut out) => {
+            if scale.up_in_place(&mut out) {
+                Ok(out)
+            } else {
+                // Extreme scales, or an answer beyond the range: the general path, on the
+                // answer at order one computed again.
+                scale.up(solve_at_order_one(law, &unit)?)
+            }
+        }
         // Not a bug of the law when the data do not fit in doubles at order one.
         Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, &unit) {
             Some(why) => Err(ImpactError::IllConditioned { law, why, detail }),
@@ -181,6 +186,7 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
 
 /// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
 /// `[1, 2)`.
+#[inline]
 fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     let mirrored = problem.v_a.t < 0.0;
     let pb = if mirrored {
@@ -234,6 +240,7 @@ const COHERENCE_TOL: Real = 1e-7;
 /// Checks a solution (paper's frame) against the coherence conditions of [P, Sect. 4.2]
 /// and the momentum relations (22)–(23): `I_n > 0`, `v_n^S ≥ 0`, `|I_t| ≤ μ I_n`, the sign
 /// of `v_t^S` matching the type, `v^S − v^A = W I`.
+#[inline]
 fn check_coherence(law: Law, pb: &ImpactProblem, sol: &LawSolution) -> Result<(), ImpactError> {
     let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
     let wi = w.apply(i);

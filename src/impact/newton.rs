@@ -17,6 +17,7 @@ use crate::math::Real;
 ///
 /// On the boundary both sides give the same impulses [P, Comment a]; it is given to
 /// forward sliding (the slip stops exactly as the collision ends, `v_t^S = 0`).
+#[inline]
 pub fn collision_type(
     c: &Coefficients,
     case: SignCase,
@@ -50,6 +51,7 @@ pub fn collision_type(
 ///
 /// All three are derived again from Eqs. (22)–(23) and the phase conditions (46), (48),
 /// (51) in `tests/impact_laws.rs`, which checks Eqs. (22)–(23) on the result.
+#[inline]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
     let (e, mu) = (pb.e, pb.mu);
     let big_v = -pb.v_a.n;

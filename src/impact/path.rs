@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::coefficients::Coefficients;
 use super::outcome::CollisionType;
 use super::problem::{ContactVelocity, ImpactMatrix, Impulse};
-use super::scale::{Exponents, ldexp};
+use super::scale::Rescale;
 use crate::math::Real;
 
 /// A point of the collision, reached after the normal impulse `i.n`.
@@ -39,6 +39,7 @@ impl Slope {
     /// The point reached from `p0` after the normal impulse `x` along this slope: the
     /// velocities are linear in `x`, the works quadratic,
     /// `W_n += v_n0 x + ½ dv_n x²`, `W_t += dĨ_t (v_t0 x + ½ dv_t x²)`.
+    #[inline]
     fn advance(&self, p0: &PathPoint, x: Real) -> PathPoint {
         PathPoint {
             i: Impulse::new(p0.i.n + x, p0.i.t + self.di_t * x),
@@ -77,6 +78,7 @@ pub struct Phases {
 
 impl Phases {
     /// A single phase from the origin to `end`.
+    #[inline]
     pub(super) fn one(v_a: ContactVelocity, kind: CollisionType, end: PathPoint) -> Self {
         Self {
             v_a,
@@ -87,6 +89,7 @@ impl Phases {
     }
 
     /// Two phases: from the origin to `mid`, then to `end`.
+    #[inline]
     pub(super) fn two(
         v_a: ContactVelocity,
         first: CollisionType,
@@ -132,6 +135,7 @@ impl Phases {
     }
 
     /// The phases, in order.
+    #[inline]
     pub fn iter(&self) -> impl Iterator<Item = Phase> + '_ {
         (0..self.len()).map(|k| Phase {
             kind: self.kinds[k],
@@ -148,12 +152,14 @@ impl Phases {
     }
 
     /// The end of the collision.
+    #[inline]
     pub fn end(&self) -> &PathPoint {
         &self.ends[self.len() - 1]
     }
 
     /// The same phases ending exactly at the impulse `i` and velocity `v` (a closed form's
     /// values, equal to the path's own end up to rounding).
+    #[inline]
     pub(super) fn ending_at(mut self, i: Impulse, v: ContactVelocity) -> Self {
         let k = self.len() - 1;
         self.ends[k].i = i;
@@ -163,21 +169,22 @@ impl Phases {
 
     /// The phases of the problem `(s W, c v^A)` from those of `(W, v^A)`, with the powers
     /// of two of [`Scale::exponents`](super::scale::Scale::exponents).
-    pub(super) fn scaled(mut self, k: &Exponents) -> Self {
-        self.v_a =
-            ContactVelocity::new(ldexp(self.v_a.n, k.velocity), ldexp(self.v_a.t, k.velocity));
+    #[inline]
+    pub(super) fn scaled<R: Rescale>(mut self, k: &R) -> Self {
+        self.v_a = ContactVelocity::new(k.velocity(self.v_a.n), k.velocity(self.v_a.t));
         for p in &mut self.ends {
             *p = PathPoint {
-                i: Impulse::new(ldexp(p.i.n, k.impulse), ldexp(p.i.t, k.impulse)),
-                v: ContactVelocity::new(ldexp(p.v.n, k.velocity), ldexp(p.v.t, k.velocity)),
-                work_n: ldexp(p.work_n, k.work),
-                work_t: ldexp(p.work_t, k.work),
+                i: Impulse::new(k.impulse(p.i.n), k.impulse(p.i.t)),
+                v: ContactVelocity::new(k.velocity(p.v.n), k.velocity(p.v.t)),
+                work_n: k.work(p.work_n),
+                work_t: k.work(p.work_t),
             };
         }
         self
     }
 
     /// Mirrors the phases into the frame whose tangent is `−t`.
+    #[inline]
     pub(super) fn mirror(&mut self) {
         self.v_a.t = -self.v_a.t;
         for p in &mut self.ends {
@@ -223,6 +230,7 @@ impl RouthPath {
     }
 
     /// [`RouthPath::new`] with g, h, p, q already computed.
+    #[inline]
     pub fn with_coefficients(
         w: &ImpactMatrix,
         mu: Real,
@@ -301,6 +309,7 @@ impl RouthPath {
 
     /// The slip mode of a collision that ends at the normal impulse `i_n`: forward
     /// sliding up to and including G, then the mode after G.
+    #[inline]
     pub fn kind_at(&self, i_n: Real) -> CollisionType {
         if i_n <= self.i_g {
             CollisionType::ForwardSliding
@@ -310,6 +319,7 @@ impl RouthPath {
     }
 
     /// The point of the path at the normal impulse `i_n ≥ 0`.
+    #[inline]
     pub fn at(&self, i_n: Real) -> PathPoint {
         if i_n <= self.i_g {
             let mut pt = self.slide.advance(&self.origin, i_n);
@@ -329,6 +339,7 @@ impl RouthPath {
     /// Phase 1: `Ĩ_n = (target − v_n^A)/h` if `h > 0` and this is before G; else
     /// phase 2: `Ĩ_n = Ĩ_n(G) + (target − v_n(G)) / (dv_n/dĨ_n)`.
     /// `None` if the path never gets there (impossible for positive definite `W`).
+    #[inline]
     pub fn reach_normal_velocity(&self, target: Real) -> Option<Real> {
         if self.slide.dv_n > 0.0 {
             let x = (target - self.origin.v.n) / self.slide.dv_n;
@@ -348,6 +359,7 @@ impl RouthPath {
     ///
     /// On a phase starting at `v_n0` with slope `s`, the work after `x` is
     /// `v_n0 x + ½ s x² = R`, so `x = 2R / (v_n0 + √(v_n0² + 2 s R))` (the stable root).
+    #[inline]
     pub fn reach_normal_work(&self, from: &PathPoint, work: Real) -> Option<Real> {
         let mut remaining = work;
         let (mut p0, mut slope, mut room) = if from.i.n < self.i_g {
@@ -370,6 +382,7 @@ impl RouthPath {
 
     /// The phases travelled until the normal impulse `i_n` (an empty first phase, when
     /// the slip is zero from the start, is left out).
+    #[inline]
     pub fn phases_until(&self, i_n: Real) -> Phases {
         let end = self.at(i_n);
         let v_a = self.origin.v;
@@ -391,6 +404,7 @@ impl RouthPath {
 
 /// The root `x ≥ 0` of `v0 x + ½ s x² = r` for `r ≥ 0` on a rising branch, in the form
 /// without cancellation; `None` if there is none.
+#[inline]
 fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
     if r <= 0.0 {
         return Some(0.0);

@@ -232,6 +232,14 @@ impl ImpactProblem {
     /// `e ∈ [0, 1]`, `μ ≥ 0`. The sign of `Δ` is tested on `W` divided by the power of
     /// two of its largest entry, so that `m_nn m_tt` neither overflows nor underflows.
     pub fn validate(&self) -> Result<(), ImpactError> {
+        self.at_order_one().map(|_| ())
+    }
+
+    /// [`validate`](Self::validate), returning the powers of two of `W` and `v^A` it
+    /// computes on the way and the problem brought to order one with them
+    /// ([`Scale::down`]), which the solver solves.
+    #[inline]
+    pub(super) fn at_order_one(&self) -> Result<(Scale, ImpactProblem), ImpactError> {
         let all_finite = self.w.nn.is_finite()
             & self.w.nt.is_finite()
             & self.w.tt.is_finite()
@@ -242,7 +250,8 @@ impl ImpactProblem {
         if !all_finite {
             return Err(self.first_non_finite());
         }
-        let unit = Scale::of(&self.w, self.v_a).matrix_down(&self.w);
+        let scale = Scale::of(&self.w, self.v_a);
+        let unit = scale.matrix_down(&self.w);
         if !(unit.nn > 0.0
             && unit.tt >= 0.0
             && unit.det() >= -SINGULAR_RELATIVE_DET * unit.nn * unit.tt)
@@ -263,7 +272,7 @@ impl ImpactProblem {
         if self.mu < 0.0 {
             return Err(ImpactError::NegativeFriction { mu: self.mu });
         }
-        Ok(())
+        Ok((scale, scale.down(self, unit)))
     }
 
     /// The error naming the first non-finite input (the slow path of `validate`).

@@ -44,6 +44,7 @@ pub(super) struct Scale {
 impl Scale {
     /// The scales of `W` and `v^A`: the powers of two at or below their largest entries
     /// (both nonzero for valid data: `m_nn > 0`, `v_n^A < 0`).
+    #[inline]
     pub(super) fn of(w: &ImpactMatrix, v_a: ContactVelocity) -> Self {
         Self {
             w: exponent(w.nn.abs().max(w.nt.abs()).max(w.tt.abs())),
@@ -52,6 +53,7 @@ impl Scale {
     }
 
     /// `W / s`, whose largest entry lies in `[1, 2)`.
+    #[inline]
     pub(super) fn matrix_down(&self, w: &ImpactMatrix) -> ImpactMatrix {
         ImpactMatrix::new(
             ldexp(w.nn, -self.w),
@@ -60,10 +62,12 @@ impl Scale {
         )
     }
 
-    /// The problem `(W/s, v^A/c, e, μ)`.
-    pub(super) fn down(&self, pb: &ImpactProblem) -> ImpactProblem {
+    /// The problem `(W/s, v^A/c, e, μ)`, with `w = W/s` already computed
+    /// ([`Scale::matrix_down`]).
+    #[inline]
+    pub(super) fn down(&self, pb: &ImpactProblem, w: ImpactMatrix) -> ImpactProblem {
         ImpactProblem {
-            w: self.matrix_down(&pb.w),
+            w,
             v_a: ContactVelocity::new(ldexp(pb.v_a.n, -self.v), ldexp(pb.v_a.t, -self.v)),
             ..*pb
         }
@@ -110,6 +114,7 @@ impl Scale {
 
     /// The powers of two of an impulse, a velocity, a work, a coefficient g, h, p, q and
     /// `Δ`, in this order (see the module's table).
+    #[inline]
     pub(super) fn exponents(&self) -> Exponents {
         Exponents {
             impulse: self.v - self.w,
@@ -121,7 +126,51 @@ impl Scale {
     }
 
     /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
-    /// caller's scales; an error if a number of it is beyond the range of doubles.
+    /// caller's scales in place, when every power of two of
+    /// [`exponents`](Scale::exponents) is that of a normal double and every number the
+    /// answer reports stays in the range of doubles: each kind of quantity is multiplied by
+    /// its power of two, which is exact and equal, bit for bit, to [`Scale::up`]'s
+    /// [`ldexp`]. Returns false otherwise, and `out` then means nothing: [`Scale::up`] on
+    /// the outcome at order one gives the answer or the error.
+    #[inline]
+    pub(super) fn up_in_place(&self, out: &mut Outcome) -> bool {
+        let Some(f) = self.exponents().factors() else {
+            return false;
+        };
+        let i_n = out.impulse.n;
+        out.impulse.n = f.impulse(out.impulse.n);
+        out.impulse.t = f.impulse(out.impulse.t);
+        out.v_s = ContactVelocity::new(f.velocity(out.v_s.n), f.velocity(out.v_s.t));
+        out.delta_e = f.work(out.delta_e);
+        out.work_n = f.work(out.work_n);
+        out.work_t = f.work(out.work_t);
+        out.coefficients = out.coefficients.scaled(&f);
+        out.phases = out.phases.scaled(&f);
+        // The numbers `beyond_range` checks.
+        let c = &out.coefficients;
+        let mut finite = out.impulse.n.is_finite()
+            & out.impulse.t.is_finite()
+            & out.delta_e.is_finite()
+            & out.work_n.is_finite()
+            & out.work_t.is_finite()
+            & c.g.is_finite()
+            & c.h.is_finite()
+            & c.p.is_finite()
+            & c.q.is_finite();
+        for ph in out.phases.iter() {
+            let end = ph.end;
+            finite &= end.i.n.is_finite()
+                & end.i.t.is_finite()
+                & end.work_n.is_finite()
+                & end.work_t.is_finite();
+        }
+        finite && !(i_n > 0.0 && out.impulse.n == 0.0)
+    }
+
+    /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
+    /// caller's scales; an error if a number of it is beyond the range of doubles. (The
+    /// general path, for the answers [`Scale::up_in_place`] does not take.)
+    #[inline(never)]
     pub(super) fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
         let k = self.exponents();
         // Checked at order one: which number leaves the range, and by how much.
@@ -143,6 +192,78 @@ impl Scale {
     }
 }
 
+/// How each kind of quantity of an answer at order one is brought back to the caller's
+/// scales (see the module's table).
+pub(super) trait Rescale {
+    /// An impulse: times `c/s`.
+    fn impulse(&self, x: Real) -> Real;
+    /// A velocity: times `c`.
+    fn velocity(&self, x: Real) -> Real;
+    /// A work or an energy: times `c²/s`.
+    fn work(&self, x: Real) -> Real;
+    /// g, h, p, q: times `s`.
+    fn coefficient(&self, x: Real) -> Real;
+    /// `Δ`: times `s²`.
+    fn det(&self, x: Real) -> Real;
+}
+
+impl Rescale for Exponents {
+    #[inline]
+    fn impulse(&self, x: Real) -> Real {
+        ldexp(x, self.impulse)
+    }
+    #[inline]
+    fn velocity(&self, x: Real) -> Real {
+        ldexp(x, self.velocity)
+    }
+    #[inline]
+    fn work(&self, x: Real) -> Real {
+        ldexp(x, self.work)
+    }
+    #[inline]
+    fn coefficient(&self, x: Real) -> Real {
+        ldexp(x, self.coefficient)
+    }
+    #[inline]
+    fn det(&self, x: Real) -> Real {
+        ldexp(x, self.det)
+    }
+}
+
+/// The powers of two of [`Exponents`] as numbers, when each is a normal double: a
+/// product by one of them is exact unless it over- or underflows, and equals [`ldexp`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Factors {
+    impulse: Real,
+    velocity: Real,
+    work: Real,
+    coefficient: Real,
+    det: Real,
+}
+
+impl Rescale for Factors {
+    #[inline]
+    fn impulse(&self, x: Real) -> Real {
+        x * self.impulse
+    }
+    #[inline]
+    fn velocity(&self, x: Real) -> Real {
+        x * self.velocity
+    }
+    #[inline]
+    fn work(&self, x: Real) -> Real {
+        x * self.work
+    }
+    #[inline]
+    fn coefficient(&self, x: Real) -> Real {
+        x * self.coefficient
+    }
+    #[inline]
+    fn det(&self, x: Real) -> Real {
+        x * self.det
+    }
+}
+
 /// The powers of two by which each kind of quantity scales (see [`Scale::exponents`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Exponents {
@@ -158,10 +279,33 @@ pub(super) struct Exponents {
     pub(super) det: i32,
 }
 
+impl Exponents {
+    /// The factors `2^k`, if every `k` is the exponent of a normal double
+    /// (`−1022 ≤ k ≤ 1023`).
+    #[inline]
+    fn factors(&self) -> Option<Factors> {
+        let normal = |k: i32| (-1022..=1023).contains(&k);
+        (normal(self.impulse)
+            & normal(self.velocity)
+            & normal(self.work)
+            & normal(self.coefficient)
+            & normal(self.det))
+        .then(|| Factors {
+            impulse: pow2(self.impulse),
+            velocity: pow2(self.velocity),
+            work: pow2(self.work),
+            coefficient: pow2(self.coefficient),
+            det: pow2(self.det),
+        })
+    }
+}
+
 /// The first number of an outcome at order one that the powers of two `k` take beyond
 /// the range of doubles (infinite), or `I_n > 0` that they bring to 0, with its name, its
 /// value at order one and its power of two. (`Δ`, which no answer reports, may overflow
 /// for `|W|` beyond 1e154 and is not checked; the velocities scale as `v^A` and cannot.)
+#[cold]
+#[inline(never)]
 fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32)> {
     let c = &out.coefficients;
     let numbers = [
@@ -194,6 +338,7 @@ fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32
 
 /// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
 /// for 0 and non-finite `x`.
+#[inline]
 pub(crate) fn exponent(x: Real) -> i32 {
     if x == 0.0 || !x.is_finite() {
         return 0;
@@ -209,7 +354,18 @@ pub(crate) fn exponent(x: Real) -> i32 {
 
 /// `x · 2^k`, exact unless the result is subnormal (then rounded, at most twice) or beyond
 /// the range of doubles (then infinite).
-pub(crate) fn ldexp(mut x: Real, mut k: i32) -> Real {
+#[inline]
+pub(crate) fn ldexp(x: Real, k: i32) -> Real {
+    if (-1022..=1023).contains(&k) {
+        x * pow2(k)
+    } else {
+        ldexp_far(x, k)
+    }
+}
+
+/// [`ldexp`] for `k` beyond the exponents of the normal doubles: in steps of `2^±1022`.
+#[cold]
+fn ldexp_far(mut x: Real, mut k: i32) -> Real {
     while k > 1023 {
         x *= pow2(1023);
         k -= 1023;
@@ -222,6 +378,7 @@ pub(crate) fn ldexp(mut x: Real, mut k: i32) -> Real {
 }
 
 /// `2^k` for `k ∈ [−1022, 1023]`, from its bits.
+#[inline]
 fn pow2(k: i32) -> Real {
     debug_assert!((-1022..=1023).contains(&k));
     Real::from_bits(((k + 1023) as u64) << 52)
@@ -230,6 +387,87 @@ fn pow2(k: i32) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::impact::{Law, solve_at_order_one};
+
+    /// The in-place path of [`Scale::up_in_place`] (a product by each power of two) gives
+    /// the general path's answer ([`ldexp`] after [`beyond_range`]) bit for bit, and
+    /// declines only where the general path fails or a power of two is beyond the
+    /// exponents of the normal doubles. Random problems over the whole range of scales
+    /// (`W = L Lᵀ`, singular one time in seven), every law.
+    #[test]
+    fn in_place_scaling_is_the_general_path() {
+        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as Real / (1u64 << 53) as Real
+        };
+        let (mut in_place, mut declined, mut errors) = (0, 0, 0);
+        for k in 0..20_000 {
+            let far = |r: Real| pow2((r * 2000.0 - 1000.0) as i32);
+            let s = if k % 4 == 0 {
+                far(rnd())
+            } else {
+                rnd() * 8.0 + 0.1
+            };
+            let c = if k % 4 == 1 {
+                far(rnd())
+            } else {
+                rnd() * 8.0 + 0.1
+            };
+            let (a, b, d) = (rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd());
+            let d = if k % 7 == 0 { 0.0 } else { d };
+            let w = ImpactMatrix::new(s * a * a, s * a * b, s * (b * b + d * d));
+            let v_a = ContactVelocity::new(-c * (rnd() + 1e-3), c * (rnd() * 2.0 - 1.0));
+            let pb = ImpactProblem::new(w, v_a, rnd(), rnd() * 2.0);
+            let Ok((scale, unit)) = pb.at_order_one() else {
+                continue;
+            };
+            for law in Law::ALL {
+                let Ok(out) = solve_at_order_one(law, &unit) else {
+                    continue;
+                };
+                let general = scale.up(out);
+                let mut fast = out;
+                if scale.up_in_place(&mut fast) {
+                    in_place += 1;
+                    // Debug prints every double exactly (and −0 apart from 0).
+                    assert_eq!(
+                        format!("{general:?}"),
+                        format!("{:?}", Ok::<_, ImpactError>(fast))
+                    );
+                } else {
+                    declined += 1;
+                    let beyond_normal = scale.exponents().factors().is_none();
+                    errors += usize::from(general.is_err());
+                    assert!(general.is_err() || beyond_normal, "{pb:?}: {general:?}");
+                }
+            }
+        }
+        assert!(in_place > 40_000, "{in_place}");
+        assert!(errors > 100 && declined > errors, "{declined} {errors}");
+
+        // I_n > 0 that the in-place path brings to 0 while its powers of two are normal:
+        // W ≈ 2^511, v_t^A = 2^-255, v_n^A = −2^-575 (I_n ≈ 2^-320 · 2^-766 at order one).
+        let w = ImpactMatrix::new(pow2(511), pow2(508), pow2(511));
+        let pb = ImpactProblem::new(w, ContactVelocity::new(-pow2(-575), pow2(-255)), 0.5, 0.3);
+        let (scale, unit) = pb.at_order_one().unwrap();
+        assert!(scale.exponents().factors().is_some());
+        for law in Law::ALL {
+            let out = solve_at_order_one(law, &unit).unwrap();
+            assert!(out.impulse.n > 0.0);
+            let mut fast = out;
+            assert!(!scale.up_in_place(&mut fast), "{law}");
+            assert!(
+                matches!(
+                    scale.up(out),
+                    Err(ImpactError::OutOfRange { what: "I_n", .. })
+                ),
+                "{law}"
+            );
+        }
+    }
 
     #[test]
     fn exponent_and_ldexp_are_exact() {

@@ -1,4 +1,4 @@
-//! Step-size control of DOPRI5: the weighted error norm, the PI controller and the
+//! Step-size control of the adaptive methods: the weighted error norm, the PI controller and the
 //! initial step guess of [HNW, II.4] as in Hairer's code `DOPRI5`, and the clipping of a
 //! step to a stop time (shared with RK4).
 
@@ -29,7 +29,7 @@ pub(crate) fn error_norm(e: &[Real], y0: &[Real], y1: &[Real], rtol: Real, atol:
 
 /// The PI step-size controller with Lund's stabilization [HNW, II.4, Eq. (4.13) and the
 /// text after it; Gustafsson, ACM TOMS 20 (1994)], with the constants of Hairer's
-/// `DOPRI5`:
+/// `DOPRI5` (`DOP853`: the exponent `1/8 − 0.2 β`):
 ///
 /// ```text
 ///   fac = err^(1/5 − 0.75 β) · err_old^(−β) / safety,  clamped to [1/fac_max, 1/fac_min]
@@ -46,6 +46,9 @@ pub(crate) struct PiController {
     pub beta: Real,
     pub fac_min: Real,
     pub fac_max: Real,
+    /// The exponent of `err`: `κ₀ − κ₁ β` (DOPRI5: `1/5 − 0.75 β`; DOP853:
+    /// `1/8 − 0.2 β`, Hairer's `EXPO1`).
+    expo: Real,
     err_old: Real,
     rejected_last: bool,
 }
@@ -59,12 +62,21 @@ pub(crate) struct Verdict {
 }
 
 impl PiController {
-    pub fn new(safety: Real, beta: Real, fac_min: Real, fac_max: Real) -> Self {
+    /// The controller of a method whose exponents are `(κ₀, κ₁)` (see
+    /// [`Tableau::controller`](super::tableau::Tableau::controller)).
+    pub fn new(
+        (k0, k1): (Real, Real),
+        safety: Real,
+        beta: Real,
+        fac_min: Real,
+        fac_max: Real,
+    ) -> Self {
         Self {
             safety,
             beta,
             fac_min,
             fac_max,
+            expo: k0 - k1 * beta,
             err_old: 1e-4,
             rejected_last: false,
         }
@@ -86,8 +98,7 @@ impl PiController {
                 h_new: h * self.fac_min,
             };
         }
-        let expo = 0.2 - 0.75 * self.beta;
-        let fac11 = err.powf(expo);
+        let fac11 = err.powf(self.expo);
         if err <= 1.0 {
             let fac = (fac11 / self.err_old.powf(self.beta) / self.safety)
                 .clamp(1.0 / self.fac_max, 1.0 / self.fac_min);
@@ -110,6 +121,39 @@ impl PiController {
             }
         }
     }
+}
+
+/// DOP853's error norm [HNW, II.10; Hairer's `DOP853`] from its two estimates `e5 = Σ ê₅ k`
+/// and `e3 = Σ ê₃ k` (without the factor `h`):
+///
+/// ```text
+///   skᵢ = atol + rtol · max(|y₀ᵢ|, |y₁ᵢ|),  E5 = Σ (e5ᵢ/skᵢ)²,  E3 = Σ (e3ᵢ/skᵢ)²
+///   err = |h| · E5 / √(n (E5 + 0.01 E3))     (the denominator 1 when it is 0)
+/// ```
+pub(crate) fn dop853_error_norm(
+    e5: &[Real],
+    e3: &[Real],
+    y0: &[Real],
+    y1: &[Real],
+    rtol: Real,
+    atol: Real,
+    h: Real,
+) -> Real {
+    if e5.is_empty() {
+        return 0.0;
+    }
+    let (mut err5, mut err3) = (0.0, 0.0);
+    for i in 0..e5.len() {
+        let sk = atol + rtol * y0[i].abs().max(y1[i].abs());
+        let (a, b) = (e5[i] / sk, e3[i] / sk);
+        err5 += a * a;
+        err3 += b * b;
+    }
+    let mut deno = err5 + 0.01 * err3;
+    if deno <= 0.0 {
+        deno = 1.0;
+    }
+    h.abs() * err5 * (1.0 / (e5.len() as Real * deno)).sqrt()
 }
 
 /// The step to try from `t` toward `t_stop`, `remaining = t_stop − t > 0`: `h_try` capped
@@ -177,7 +221,7 @@ mod tests {
 
     #[test]
     fn controller_grows_at_most_fac_max_and_shrinks_after_rejection() {
-        let mut c = PiController::new(0.9, 0.04, 0.2, 10.0);
+        let mut c = PiController::new((0.2, 0.75), 0.9, 0.04, 0.2, 10.0);
         let v = c.judge(1.0, 0.0);
         assert!(v.accept);
         assert_eq!(v.h_new, 10.0);

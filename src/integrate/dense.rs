@@ -10,6 +10,17 @@
 //!
 //! With `r₅ = 0` this is the cubic Hermite interpolant of `(y₀, f₀, y₁, f₁)` (order 3,
 //! used by RK4); DOPRI5 adds Shampine's `r₅` for order 4. `u'(0) = h f₀`, `u'(1) = h f₁`.
+//!
+//! DOP853's extension of order 7 continues the same nesting with `r₆, r₇, r₈` [HNW, II.10;
+//! Hairer's `CONTD8`]:
+//!
+//! ```text
+//!   u(θ) = y₀ + θ (r₂ + (1−θ) (r₃ + θ (r₄ + (1−θ) (r₅ + θ (r₆ + (1−θ) (r₇ + θ r₈))))))
+//! ```
+//!
+//! Its derivative is evaluated from the inside out: with `q₈ = r₈` and
+//! `qₘ = rₘ + φₘ qₘ₊₁` (`φ` alternating `θ`, `1−θ`), `qₘ' = φₘ' qₘ₊₁ + φₘ qₘ₊₁'`, and
+//! `u' = q₂ + θ q₂'`. The quartic keeps its own formulas (RK4 and DOPRI5 bit for bit).
 
 use crate::math::Real;
 
@@ -26,6 +37,10 @@ pub(crate) struct Dense {
     pub r4: Vec<Real>,
     /// Shampine's quartic term (all zeros for the cubic Hermite interpolant).
     pub r5: Vec<Real>,
+    /// DOP853's terms `r₆, r₇, r₈` (empty for the quartic).
+    pub r678: [Vec<Real>; 3],
+    /// Whether the polynomial is DOP853's of degree 7.
+    pub septic: bool,
 }
 
 impl Dense {
@@ -37,12 +52,28 @@ impl Dense {
             r3: vec![0.0; n],
             r4: vec![0.0; n],
             r5: vec![0.0; n],
+            r678: Default::default(),
+            septic: false,
+        }
+    }
+
+    /// The polynomial of degree 7 of DOP853 (allocates `r₆ … r₈`).
+    pub fn septic(n: usize) -> Self {
+        Self {
+            r678: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+            septic: true,
+            ..Self::new(n)
         }
     }
 
     pub fn resize(&mut self, n: usize) {
         for v in [&mut self.r2, &mut self.r3, &mut self.r4, &mut self.r5] {
             v.resize(n, 0.0);
+        }
+        if self.septic {
+            for v in &mut self.r678 {
+                v.resize(n, 0.0);
+            }
         }
     }
 
@@ -77,6 +108,9 @@ impl Dense {
         for v in [&mut self.r2, &mut self.r3, &mut self.r4, &mut self.r5] {
             v.fill(0.0);
         }
+        for v in &mut self.r678 {
+            v.fill(0.0);
+        }
     }
 
     /// `θ` of `t`; 0 on an empty step.
@@ -93,6 +127,15 @@ impl Dense {
     pub fn eval(&self, y0: &[Real], t: Real, out: &mut [Real]) {
         let th = self.theta(t);
         let th1 = 1.0 - th;
+        if self.septic {
+            let [r6, r7, r8] = &self.r678;
+            for (i, o) in out.iter_mut().enumerate() {
+                let inner = self.r5[i] + th * (r6[i] + th1 * (r7[i] + th * r8[i]));
+                *o = y0[i]
+                    + th * (self.r2[i] + th1 * (self.r3[i] + th * (self.r4[i] + th1 * inner)));
+            }
+            return;
+        }
         let coeffs = self
             .r2
             .iter()
@@ -110,10 +153,27 @@ impl Dense {
             return;
         }
         let th = self.theta(t);
+        let inv_h = 1.0 / self.h;
+        if self.septic {
+            let th1 = 1.0 - th;
+            let [r6, r7, r8] = &self.r678;
+            let r = [&self.r2, &self.r3, &self.r4, &self.r5, r6, r7];
+            for (i, o) in out.iter_mut().enumerate() {
+                // q = r₈; for m = 7 … 2: q ← rₘ + φₘ q, with φₘ = θ for odd m, 1 − θ for
+                // even m (u = y₀ + θ q₂).
+                let (mut q, mut dq) = (r8[i], 0.0);
+                for (m, rm) in (2..8usize).zip(r).rev() {
+                    let (phi, dphi) = if m % 2 == 1 { (th, 1.0) } else { (th1, -1.0) };
+                    dq = dphi * q + phi * dq;
+                    q = rm[i] + phi * q;
+                }
+                *o = (q + th * dq) * inv_h;
+            }
+            return;
+        }
         let a3 = 1.0 - 2.0 * th;
         let a4 = th * (2.0 - 3.0 * th);
         let a5 = 2.0 * th * (1.0 - th) * (1.0 - 2.0 * th);
-        let inv_h = 1.0 / self.h;
         let coeffs = self
             .r2
             .iter()

@@ -1,20 +1,23 @@
-//! Time integration of `ẏ = f(t, y)`: DOPRI5(4) with dense output, RK4 with a fixed step.
+//! Time integration of `ẏ = f(t, y)`: DOPRI5(4) and DOP853 with step-size control and
+//! dense output, RK4 with a fixed step.
 //! This module knows nothing about bodies or contacts. ([`Method`] also names the
 //! Moreau–Jean time-stepping scheme, which is not an ODE stepper: it lives in `sim`.)
 //!
 //! - [`OdeSystem`]: the system, whose right-hand side may fail.
 //! - [`Stepper`]: one accepted step at a time, the continuous extension (dense output) of
 //!   the last step, a re-step to an event time at full order, a reset at an impact, a cap
-//!   on the step, and work [`Counters`]. Implemented by [`Dopri5`] [HNW, II.4–6;
-//!   Dormand & Prince 1980; Shampine 1986] and [`Rk4`] [HNW, II.1], and by
-//!   [`AnyStepper`] which picks one from the run's [`Method`].
+//!   on the step, and work [`Counters`]. Implemented by [`RungeKutta`], one explicit
+//!   Runge–Kutta stepper driven by its [`tableau::Tableau`]: DOPRI5 [HNW, II.4–6;
+//!   Dormand & Prince 1980; Shampine 1986], DOP853 [HNW, II.10] and RK4 [HNW, II.1],
+//!   chosen by the run's [`Method`] ([`AnyStepper`], [`Dopri5`] and [`Rk4`] are its
+//!   former names).
 //! - Event location on the dense output lives in [`crate::events`]; the reset (impact) map
 //!   stays with the simulation loop.
 //!
 //! Every vector is allocated when a stepper is built (or when `start` meets a system of
 //! another dimension); a step allocates nothing.
 //!
-//! Why our own DOPRI5 rather than a crate: `notes/crates.md` §3d (event semantics for
+//! Why our own Runge–Kutta rather than a crate: `notes/crates.md` §3d (event semantics for
 //! impacts, a maximum step, re-stepping to the event).
 //!
 //! # Driving a stepper
@@ -49,20 +52,19 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-mod any;
 mod control;
 mod dense;
-mod dopri5;
 mod error;
-mod rk4;
+mod rk;
 mod stepper;
 mod system;
 pub mod tableau;
 
-pub use any::AnyStepper;
-pub use dopri5::{Dopri5, Dopri5Settings};
 pub use error::{IntegrateError, SettingsError};
-pub use rk4::{Rk4, Rk4Settings};
+pub use rk::{
+    AdaptiveSettings, AnyStepper, Dopri5, Dopri5Settings, Rk4, Rk4Settings, RungeKutta,
+    StepperConfig,
+};
 pub use stepper::{Counters, StepOutcome, Stepper};
 pub use system::{FnSystem, OdeSystem};
 
@@ -72,6 +74,9 @@ pub use system::{FnSystem, OdeSystem};
 pub enum Method {
     /// Dormand–Prince 5(4), adaptive step, dense output of order 4 [HNW, II.5–6].
     Dopri5,
+    /// Dormand–Prince 8(5,3), adaptive step, dense output of order 7 [HNW, II.10]: for
+    /// tight tolerances.
+    Dop853,
     /// The classical Runge–Kutta method of order 4 with a fixed step.
     Rk4,
     /// The time-stepping scheme of Moreau and Jean with a fixed step `dt`: not an ODE
@@ -82,10 +87,21 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order shown to users.
-    pub const ALL: [Method; 3] = [Method::Dopri5, Method::Rk4, Method::MoreauJean];
+    pub const ALL: [Method; 4] = [
+        Method::Dopri5,
+        Method::Dop853,
+        Method::Rk4,
+        Method::MoreauJean,
+    ];
 
-    /// The methods that are ODE steppers ([`AnyStepper`] builds them).
-    pub const ODE: [Method; 2] = [Method::Dopri5, Method::Rk4];
+    /// The methods that are ODE steppers ([`RungeKutta`] runs them).
+    pub const ODE: [Method; 3] = [Method::Dopri5, Method::Dop853, Method::Rk4];
+
+    /// Whether the method is an ODE stepper run by the event-driven loop (not
+    /// Moreau–Jean's time-stepping).
+    pub fn is_ode(self) -> bool {
+        !matches!(self, Method::MoreauJean)
+    }
 
     /// Whether the method takes a fixed step `dt` (RK4, Moreau–Jean).
     pub fn is_fixed_step(self) -> bool {
@@ -96,6 +112,7 @@ impl Method {
     pub fn name(self) -> &'static str {
         match self {
             Method::Dopri5 => "dopri5",
+            Method::Dop853 => "dop853",
             Method::Rk4 => "rk4",
             Method::MoreauJean => "moreau-jean",
         }
@@ -110,7 +127,7 @@ impl fmt::Display for Method {
 
 /// A method name that is not known.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown method `{0}` (expected one of: dopri5, rk4, moreau-jean)")]
+#[error("unknown method `{0}` (expected one of: dopri5, dop853, rk4, moreau-jean)")]
 pub struct UnknownMethod(pub String);
 
 impl FromStr for Method {

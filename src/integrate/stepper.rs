@@ -22,7 +22,7 @@ pub enum StepOutcome {
 pub struct Counters {
     /// Accepted steps (re-taken steps not included).
     pub steps: u64,
-    /// Rejected steps (DOPRI5 only; RK4 never rejects).
+    /// Rejected steps (the adaptive methods; RK4 only after a failing stage).
     pub rejected: u64,
     /// Evaluations of the right-hand side, all included: start, stages, steps re-taken
     /// to an event and resets.
@@ -42,14 +42,14 @@ pub struct Counters {
 /// [`dense`](Stepper::dense) evaluates the continuous extension inside it.
 ///
 /// Integration runs forward in time only. The methods are generic over the system, so
-/// the trait is not object safe; [`AnyStepper`](super::AnyStepper) chooses a method at
-/// run time.
+/// the trait is not object safe; [`RungeKutta`](super::RungeKutta) runs the method chosen
+/// at run time.
 pub trait Stepper {
     /// The method.
     fn method(&self) -> Method;
 
-    /// Sets the initial value `y(t0) = y0`, evaluates `f(t0, y0)`, and (DOPRI5) guesses
-    /// the first step. The last step is empty (`t_prev() == t() == t0`).
+    /// Sets the initial value `y(t0) = y0`, evaluates `f(t0, y0)`, and (the adaptive
+    /// methods) guesses the first step. The last step is empty (`t_prev() == t() == t0`).
     fn start<S: OdeSystem>(
         &mut self,
         sys: &mut S,
@@ -58,7 +58,8 @@ pub trait Stepper {
     ) -> Result<(), IntegrateError<S::Error>>;
 
     /// Takes one accepted step that does not go past `t_stop` (it ends exactly at
-    /// `t_stop` when it reaches it). DOPRI5 may reject and retry steps inside this call.
+    /// `t_stop` when it reaches it). An adaptive method may reject and retry steps inside
+    /// this call.
     fn step<S: OdeSystem>(
         &mut self,
         sys: &mut S,

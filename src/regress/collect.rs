@@ -128,8 +128,10 @@ pub fn run_scene(
     let run = match settings.integrator.method {
         Method::MoreauJean => MoreauJean::new(&scene.model, &settings, material)
             .map(|mut mj| mj.run(&scene.initial, &mut collector, None)),
-        Method::Dopri5 | Method::Rk4 => Simulation::new(&scene.model, &settings, material)
-            .map(|mut sim| sim.run(&scene.initial, &mut collector, None)),
+        Method::Dopri5 | Method::Dop853 | Method::Rk4 => {
+            Simulation::new(&scene.model, &settings, material)
+                .map(|mut sim| sim.run(&scene.initial, &mut collector, None))
+        }
     }
     .map_err(|source| RegressError::Start {
         scene: scene.path.clone(),

@@ -239,8 +239,10 @@ impl<'s> Sweep<'s> {
         let summary = match settings.integrator.method {
             Method::MoreauJean => MoreauJean::new(model, &settings, overrides)
                 .map(|mut mj| mj.run(&initial, &mut NullObserver, interrupt)),
-            Method::Dopri5 | Method::Rk4 => Simulation::new(model, &settings, overrides)
-                .map(|mut sim| sim.run(&initial, &mut NullObserver, interrupt)),
+            Method::Dopri5 | Method::Dop853 | Method::Rk4 => {
+                Simulation::new(model, &settings, overrides)
+                    .map(|mut sim| sim.run(&initial, &mut NullObserver, interrupt))
+            }
         }
         .map_err(|e| NotRun {
             stop: "error",

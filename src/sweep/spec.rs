@@ -25,7 +25,7 @@ pub enum Param {
     /// `law`: impact law of every contact (`newton`, `kane-levinson`, `poisson`,
     /// `stronge`); lists only.
     Law,
-    /// `method`: integration method (`dopri5`, `rk4`, `moreau-jean`); lists only.
+    /// `method`: integration method (`dopri5`, `dop853`, `rk4`, `moreau-jean`); lists only.
     Method,
     /// `t_end`: end time (s), > 0.
     TEnd,

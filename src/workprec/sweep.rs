@@ -18,6 +18,8 @@ use crate::sim::{
 pub enum Method {
     /// The event-driven loop with DOPRI5(4); the setting is `rtol` (`atol = 1e-2 rtol`).
     Dopri5,
+    /// The event-driven loop with DOP853; the setting is `rtol` (`atol = 1e-2 rtol`).
+    Dop853,
     /// The event-driven loop with RK4 at a fixed step; the setting is the step (s).
     Rk4,
     /// The Moreau–Jean time-stepping (θ = ½); the setting is the step (s).
@@ -28,8 +30,9 @@ pub enum Method {
 
 impl Method {
     /// Every method, in chart order.
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 5] = [
         Method::Dopri5,
+        Method::Dop853,
         Method::Rk4,
         Method::MoreauJean,
         Method::Rapier,
@@ -39,6 +42,7 @@ impl Method {
     pub fn name(self) -> &'static str {
         match self {
             Method::Dopri5 => "dopri5",
+            Method::Dop853 => "dop853",
             Method::Rk4 => "rk4",
             Method::MoreauJean => "moreau-jean",
             Method::Rapier => "rapier",
@@ -48,7 +52,7 @@ impl Method {
     /// The name of the swept setting: `rtol` or `dt`.
     pub fn parameter(self) -> &'static str {
         match self {
-            Method::Dopri5 => "rtol",
+            Method::Dopri5 | Method::Dop853 => "rtol",
             _ => "dt",
         }
     }
@@ -58,11 +62,12 @@ impl Method {
         Method::ALL.into_iter().find(|m| m.name() == name)
     }
 
-    /// The default sweep of the setting: tolerances from 1e-3 to 1e-12 for DOPRI5, steps
-    /// from 1e-2 s down for the fixed-step methods (each divides the end times used).
+    /// The default sweep of the setting: tolerances from 1e-3 to 1e-12 for DOPRI5 and
+    /// DOP853, steps from 1e-2 s down for the fixed-step methods (each divides the end
+    /// times used).
     pub fn default_sweep(self) -> Vec<Real> {
         match self {
-            Method::Dopri5 => (3..=12).map(|k| 10f64.powi(-k)).collect(),
+            Method::Dopri5 | Method::Dop853 => (3..=12).map(|k| 10f64.powi(-k)).collect(),
             Method::Rk4 => vec![1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4],
             Method::MoreauJean | Method::Rapier => {
                 vec![1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5]
@@ -76,8 +81,12 @@ fn configured(scene: &Scene, method: Method, setting: Real) -> crate::settings::
     let mut s = scene.settings.clone();
     s.output_rate = 0.0;
     match method {
-        Method::Dopri5 => {
-            s.integrator.method = Integrator::Dopri5;
+        Method::Dopri5 | Method::Dop853 => {
+            s.integrator.method = if method == Method::Dop853 {
+                Integrator::Dop853
+            } else {
+                Integrator::Dopri5
+            };
             s.integrator.rtol = setting;
             s.integrator.atol = 1e-2 * setting;
         }
@@ -107,9 +116,11 @@ pub fn run_ricochet(
     };
     let overrides = MaterialOverride::default();
     Ok(match method {
-        Method::Dopri5 | Method::Rk4 => Simulation::new(&scene.model, &settings, overrides)
-            .map_err(setup)?
-            .run(&scene.initial, observer, None),
+        Method::Dopri5 | Method::Dop853 | Method::Rk4 => {
+            Simulation::new(&scene.model, &settings, overrides)
+                .map_err(setup)?
+                .run(&scene.initial, observer, None)
+        }
         Method::MoreauJean => MoreauJean::new(&scene.model, &settings, overrides)
             .map_err(setup)?
             .run(&scene.initial, observer, None),

@@ -244,7 +244,12 @@ fn workprec(
             &series,
         )?;
     }
-    for other in [Method::MoreauJean, Method::Rapier, Method::Rk4] {
+    for other in [
+        Method::MoreauJean,
+        Method::Rapier,
+        Method::Rk4,
+        Method::Dop853,
+    ] {
         if let Some(line) = equal_wall_ratio(&rows, other, "velocity") {
             println!("  {}: {line}", case.name);
             let _ = writeln!(notes, "{}: {line}", case.name);
@@ -253,14 +258,18 @@ fn workprec(
     if case.name == "kane_double_pendulum" {
         let mut s = scene.clone();
         s.settings.t_end = 2.0;
-        let (wall, lo, hi) = sweep::time_ricochet(&s, Method::Dopri5, 1e-10, repeats.max(5))?;
-        let line = format!(
-            "kane_double_pendulum to 2 s at rtol 1e-10 (atol 1e-12), no log: wall {wall:.3e} s \
-             (runs {lo:.3e}–{hi:.3e}), {:.3e} simulated s per wall s (target ≥ 1e4)",
-            2.0 / wall
-        );
-        println!("  {line}");
-        let _ = writeln!(notes, "{line}");
+        for method in [Method::Dopri5, Method::Dop853] {
+            let (wall, lo, hi) = sweep::time_ricochet(&s, method, 1e-10, repeats.max(5))?;
+            let line = format!(
+                "kane_double_pendulum to 2 s with {} at rtol 1e-10 (atol 1e-12), no log: wall \
+                 {wall:.3e} s (runs {lo:.3e}–{hi:.3e}), {:.3e} simulated s per wall s (target \
+                 ≥ 1e4)",
+                method.name(),
+                2.0 / wall
+            );
+            println!("  {line}");
+            let _ = writeln!(notes, "{line}");
+        }
     }
     Ok(rows)
 }
@@ -432,6 +441,7 @@ fn equal_wall_ratio(rows: &[Row], other: Method, kind: &str) -> Option<String> {
             other.name()
         ));
     }
+    let p = other.parameter();
     let min = ratios
         .iter()
         .fold(ratios[0], |m, p| if p.1 < m.1 { *p } else { m });
@@ -439,8 +449,8 @@ fn equal_wall_ratio(rows: &[Row], other: Method, kind: &str) -> Option<String> {
         .iter()
         .fold(ratios[0], |m, p| if p.1 > m.1 { *p } else { m });
     Some(format!(
-        "{kind} error of {} / DOPRI5's at equal wall time: from {:.2e} (dt {:.0e}) to {:.2e} \
-         (dt {:.0e}) over {} settings",
+        "{kind} error of {} / DOPRI5's at equal wall time: from {:.2e} ({p} {:.0e}) to {:.2e} \
+         ({p} {:.0e}) over {} settings",
         other.name(),
         min.1,
         min.0,

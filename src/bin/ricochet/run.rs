@@ -61,13 +61,13 @@ pub struct OverrideArgs {
     /// Coefficient of friction for every contact, ≥ 0.
     #[arg(long, allow_negative_numbers = true)]
     mu: Option<Real>,
-    /// Integration method: dopri5, rk4 (event-driven), moreau-jean (time-stepping).
+    /// Integration method: dopri5, dop853, rk4 (event-driven), moreau-jean (time-stepping).
     #[arg(long)]
     method: Option<Method>,
-    /// Relative tolerance of DOPRI5 (the integrator's).
+    /// Relative tolerance of DOPRI5 and DOP853 (the integrator's).
     #[arg(long, allow_negative_numbers = true)]
     rtol: Option<Real>,
-    /// Absolute tolerance of DOPRI5.
+    /// Absolute tolerance of DOPRI5 and DOP853.
     #[arg(long, allow_negative_numbers = true)]
     atol: Option<Real>,
     /// Step of RK4 and of Moreau–Jean (s).
@@ -207,8 +207,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut runner = match scene.settings.integrator.method {
         Method::MoreauJean => MoreauJean::new(&scene.model, &scene.settings, overrides)
             .map(|mj| Runner::MoreauJean(Box::new(mj))),
-        Method::Dopri5 | Method::Rk4 => Simulation::new(&scene.model, &scene.settings, overrides)
-            .map(|sim| Runner::EventDriven(Box::new(sim))),
+        Method::Dopri5 | Method::Dop853 | Method::Rk4 => {
+            Simulation::new(&scene.model, &scene.settings, overrides)
+                .map(|sim| Runner::EventDriven(Box::new(sim)))
+        }
     }
     .with_context(|| format!("{}: cannot simulate", args.scene.display()))?;
     let gap_tol = match &runner {
