@@ -12,7 +12,7 @@ import numpy.typing as npt
 __version__: str
 #: The impact laws: ``newton``, ``kane-levinson``, ``poisson``, ``stronge``.
 LAWS: list[str]
-#: The integration methods: ``dopri5``, ``rk4`` (event-driven), ``moreau-jean``.
+#: The integration methods: ``dopri5``, ``dop853``, ``rk4`` (event-driven), ``moreau-jean``.
 METHODS: list[str]
 
 def _solve_rows(

@@ -97,7 +97,7 @@ fn simulate(
         Method::MoreauJean => {
             MoreauJean::new(model, settings, material).map(|m| Runner::MoreauJean(Box::new(m)))
         }
-        Method::Dopri5 | Method::Rk4 => {
+        Method::Dopri5 | Method::Dop853 | Method::Rk4 => {
             Simulation::new(model, settings, material).map(|s| Runner::EventDriven(Box::new(s)))
         }
     }
