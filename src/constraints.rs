@@ -22,38 +22,10 @@
 //! Every function here is for a model with constraints; a holonomic model never calls
 //! them (its speeds are the tree's, `S = I`).
 
-use crate::kinematics::{KinematicsError, tree_velocities};
-use crate::math::{Real, Vec2, perp};
-use crate::model::{BodyId, JointId, Model, SpeedRole};
+use crate::kinematics::{KinematicsError, for_each_tree_column, tree_velocities};
+use crate::math::{Real, perp};
+use crate::model::{JointId, Model, SpeedRole};
 use crate::state::Data;
-
-/// Calls `f(index, column)` for each tree speed that moves the world point `p` of `body`:
-/// its partial velocity `v_r^P` (see [`crate::kinematics::point_jacobian`]).
-pub(crate) fn for_each_tree_column(
-    model: &Model,
-    data: &Data,
-    body: BodyId,
-    p: Vec2,
-    mut f: impl FnMut(usize, Vec2),
-) {
-    let mut b = body.index();
-    let mut r = p;
-    loop {
-        let joint = &model.joints()[b];
-        if let Some(s) = model.q_index(JointId(b)) {
-            for k in 0..joint.kind.ndof() {
-                f(s + k, data.subspace[b][k].velocity_at(r));
-            }
-        }
-        if joint.is_absolute() {
-            r = data.joint_frame[b].translation;
-        }
-        match joint.parent {
-            Some(parent) => b = parent.index(),
-            None => return,
-        }
-    }
-}
 
 /// Calls `f(i, S[index, i])` for each generalized speed `i` that the tree speed `index`
 /// depends on: `1` for its own `u_i`, the row of `S` for a removed speed.
@@ -82,23 +54,22 @@ pub(crate) fn add_tree_column(
 pub(crate) fn update_map(model: &Model, data: &mut Data) -> Result<(), KinematicsError> {
     let m = model.constraints().len();
     // World frames and rows.
-    data.constraint_rows.fill(0.0);
+    let mut rows = std::mem::take(&mut data.constraint_rows);
+    rows.fill(0.0);
     for (k, c) in model.constraints().iter().enumerate() {
         let pose = data.body_pose[c.body.index()];
         let p = pose.transform_point(c.point);
         let n = pose.transform_vector(c.normal());
         data.constraint_frame[k] = (p, n);
-        let mut rows = std::mem::take(&mut data.constraint_rows);
         for_each_tree_column(model, data, c.body, p, |i, col| rows[(k, i)] = n.dot(col));
-        data.constraint_rows = rows;
     }
-    // P C_d = L U, partial pivoting.
+    data.constraint_rows = rows;
+    // P C_d = L U, partial pivoting (`constraint_pivots[col]`: the row swapped in).
     let dep = model.dependent_speeds();
     for r in 0..m {
         for (d, &i) in dep.iter().enumerate() {
             data.constraint_lu[(r, d)] = data.constraint_rows[(r, i)];
         }
-        data.constraint_pivots[r] = r;
     }
     let scale = data.constraint_lu.amax();
     for col in 0..m {
@@ -107,11 +78,15 @@ pub(crate) fn update_map(model: &Model, data: &mut Data) -> Result<(), Kinematic
             .max_by(|&a, &b| lu[(a, col)].abs().total_cmp(&lu[(b, col)].abs()))
             .unwrap_or(col);
         lu.swap_rows(col, best);
-        data.constraint_pivots.swap(col, best);
+        data.constraint_pivots[col] = best;
         let pivot = lu[(col, col)];
         if pivot.abs().partial_cmp(&(1e-10 * scale)) != Some(std::cmp::Ordering::Greater) {
-            let k = data.constraint_pivots[col];
-            let constraint = &model.constraints()[k];
+            // The constraint whose row came to `col` (replaying the swaps: the cold path).
+            let mut order: Vec<usize> = (0..m).collect();
+            for (r, &p) in data.constraint_pivots[..=col].iter().enumerate() {
+                order.swap(r, p);
+            }
+            let constraint = &model.constraints()[order[col]];
             return Err(KinematicsError::SingularConstraints {
                 constraint: constraint.name.clone(),
                 speed: model.tree_speeds()[dep[col]].name.clone(),
@@ -144,20 +119,13 @@ pub(crate) fn update_map(model: &Model, data: &mut Data) -> Result<(), Kinematic
     Ok(())
 }
 
-/// Solves `C_d x = b` in place with the factors of [`update_map`].
+/// Solves `C_d x = b` in place with the factors of [`update_map`]: the row swaps in
+/// their order, then `L y = P b` forward and `U x = y` backward.
 fn solve_removed(data: &Data, b: &mut [Real]) {
     let m = b.len();
     let lu = &data.constraint_lu;
-    // Permute: x = P b (the pivots list, for each row of the factor, its original row).
-    let mut permuted = [0.0; 16];
-    if m <= permuted.len() {
-        for r in 0..m {
-            permuted[r] = b[data.constraint_pivots[r]];
-        }
-        b.copy_from_slice(&permuted[..m]);
-    } else {
-        let copy: Vec<Real> = (0..m).map(|r| b[data.constraint_pivots[r]]).collect();
-        b.copy_from_slice(&copy);
+    for (r, &p) in data.constraint_pivots.iter().enumerate() {
+        b.swap(r, p);
     }
     for r in 0..m {
         for c in 0..r {

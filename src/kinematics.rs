@@ -402,23 +402,40 @@ pub fn point_jacobian(
     jac: &mut Matrix2xX<Real>,
 ) -> Result<(), KinematicsError> {
     check_len("jacobian columns", model.nu(), jac.ncols())?;
-    let mut b = check_body(model, body)?;
+    check_body(model, body)?;
     jac.fill(0.0);
+    for_each_tree_column(model, data, body, p, |index, col| {
+        if model.is_holonomic() {
+            jac[(0, index)] = col.x;
+            jac[(1, index)] = col.y;
+        } else {
+            crate::constraints::add_tree_column(model, data, index, |i, w| {
+                jac[(0, i)] += w * col.x;
+                jac[(1, i)] += w * col.y;
+            });
+        }
+    });
+    Ok(())
+}
+
+/// Calls `f(index, column)` for each tree speed that moves the world point `p` of `body`,
+/// from the body to the root: its partial velocity `v_r^P` over the tree speeds,
+/// `S_k(r) = S_k.v + S_k.ω perp(r)`, with `r` moving to the joint position `a` whenever an
+/// absolute revolute joint is crossed. `body` must be in the model.
+pub(crate) fn for_each_tree_column(
+    model: &Model,
+    data: &Data,
+    body: BodyId,
+    p: Vec2,
+    mut f: impl FnMut(usize, Vec2),
+) {
+    let mut b = body.index();
     let mut r = p;
     loop {
         let joint = &model.joints()[b];
         if let Some(s) = model.q_index(JointId(b)) {
             for k in 0..joint.kind.ndof() {
-                let col = data.subspace[b][k].velocity_at(r);
-                if model.is_holonomic() {
-                    jac[(0, s + k)] = col.x;
-                    jac[(1, s + k)] = col.y;
-                } else {
-                    crate::constraints::add_tree_column(model, data, s + k, |i, w| {
-                        jac[(0, i)] += w * col.x;
-                        jac[(1, i)] += w * col.y;
-                    });
-                }
+                f(s + k, data.subspace[b][k].velocity_at(r));
             }
         }
         if joint.is_absolute() {
@@ -426,7 +443,7 @@ pub fn point_jacobian(
         }
         match joint.parent {
             Some(parent) => b = parent.index(),
-            None => return Ok(()),
+            None => return,
         }
     }
 }

@@ -121,10 +121,11 @@ pub struct Data {
     /// `update_positions`.
     pub constraint_rows: DMatrix<Real>,
     /// The LU factors of `C_d` (the columns of the removed speeds) `[m × m]`, with partial
-    /// pivoting: `P C_d = L U` packed, `constraint_pivots` the row order. Written by
+    /// pivoting: `P C_d = L U` packed, `constraint_pivots` the row swapped in at each
+    /// column (applied in order, as LAPACK's `ipiv`). Written by
     /// `update_positions`.
     pub constraint_lu: DMatrix<Real>,
-    /// The row permutation of `constraint_lu`.
+    /// The row swaps of `constraint_lu`.
     pub constraint_pivots: Vec<usize>,
     /// `S` `[nv × nu]`: `v = S u + s` (the rows of the removed speeds `−C_d⁻¹ C_i`, the
     /// others unit rows). Written by `update_positions`.

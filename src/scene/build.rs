@@ -549,16 +549,7 @@ impl Builder<'_> {
         self.u0.extend(u);
         self.u_given.extend(given);
         for (k, shape) in s.shape.iter().enumerate() {
-            let collider_name = match &shape.get_ref().name {
-                Some(n) => {
-                    if let Some(why) = ranges::bad_name(n.get_ref()) {
-                        return Err(self.err(n.span(), why));
-                    }
-                    n.get_ref().clone()
-                }
-                None if s.shape.len() == 1 => name.clone(),
-                None => format!("{name}/{k}"),
-            };
+            let collider_name = self.part_name(&shape.get_ref().name, &name, k, s.shape.len())?;
             if (self.model.colliders().iter()).any(|c| c.name == collider_name)
                 || (self.names.get(&collider_name)).is_some_and(|n| matches!(n, Named::Obstacle(_)))
             {
@@ -582,6 +573,28 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// The name of the `k`-th of `count` parts (shapes, constraints) of `body`: the one
+    /// the file gives (a valid name), else the body's own if it is the only one, else
+    /// `<body>/<k>`.
+    fn part_name(
+        &self,
+        given: &Option<Spanned<String>>,
+        body: &str,
+        k: usize,
+        count: usize,
+    ) -> Result<String, SceneError> {
+        Ok(match given {
+            Some(n) => {
+                if let Some(why) = ranges::bad_name(n.get_ref()) {
+                    return Err(self.err(n.span(), why));
+                }
+                n.get_ref().clone()
+            }
+            None if count == 1 => body.to_owned(),
+            None => format!("{body}/{k}"),
+        })
+    }
+
     /// `[[body.constraint]]` of body `id`: its `k`-th of `count`.
     fn constraint(
         &mut self,
@@ -592,16 +605,7 @@ impl Builder<'_> {
         count: usize,
     ) -> Result<(), SceneError> {
         let c = spec.get_ref();
-        let name = match &c.name {
-            Some(n) => {
-                if let Some(why) = ranges::bad_name(n.get_ref()) {
-                    return Err(self.err(n.span(), why));
-                }
-                n.get_ref().clone()
-            }
-            None if count == 1 => body.to_owned(),
-            None => format!("{body}/{k}"),
-        };
+        let name = self.part_name(&c.name, body, k, count)?;
         let name_span = c.name.as_ref().map_or(c.kind.span(), |n| n.span());
         if self.model.constraints().iter().any(|o| o.name == name) {
             return Err(self.err(
