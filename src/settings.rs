@@ -21,6 +21,50 @@ pub struct Settings {
     /// end and writes its log, and `ricochet run` exits with 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_drift: Option<Real>,
+    /// How several coupled contact points that strike at one instant are resolved (scene
+    /// `[contact] simultaneous`, `--simultaneous`). Left out of the log's settings record
+    /// when it is the default.
+    #[serde(default, skip_serializing_if = "Simultaneous::is_default")]
+    pub simultaneous: Simultaneous,
+}
+
+/// The rule for a simultaneous impact: several coupled contact points that approach at
+/// one instant, or an impact that makes another touching point of the same group approach
+/// (a cascade). A point alone in its group always gets the scene's one-point law [P].
+///
+/// The two rules differ on the classic cases: in Newton's cradle (a row of touching equal
+/// balls, struck at one end, `e = 1`) the sequential rule passes the momentum down the row
+/// and only the last ball leaves; the generalized Newton law moves every ball of the row.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Simultaneous {
+    /// Moreau's generalized Newton law with Coulomb friction over the group's touching
+    /// points at once: `v_n⁺ + e v_n⁻ ≥ 0 ⊥ P_n ≥ 0`, `|P_t| ≤ μ P_n` (a complementarity
+    /// problem). A single approaching point is struck first with the one-point law; the
+    /// cascade it starts is resolved by this law.
+    #[default]
+    GeneralizedNewton,
+    /// One point at a time: the scene's one-point law [P] on the most approaching point of
+    /// the group, then again on whichever point approaches after it, until none does.
+    Sequential,
+}
+
+impl Simultaneous {
+    /// Every rule, in the order shown to users.
+    pub const ALL: [Simultaneous; 2] = [Simultaneous::GeneralizedNewton, Simultaneous::Sequential];
+
+    /// The name in scene files, on the command line and in logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Simultaneous::GeneralizedNewton => "generalized-newton",
+            Simultaneous::Sequential => "sequential",
+        }
+    }
+
+    /// `true` for the default rule (the generalized Newton law).
+    pub fn is_default(&self) -> bool {
+        *self == Simultaneous::GeneralizedNewton
+    }
 }
 
 /// Integrator settings.
@@ -57,6 +101,24 @@ impl Default for Settings {
             output_rate: 100.0,
             integrator: IntegratorSettings::default(),
             max_drift: None,
+            simultaneous: Simultaneous::default(),
         }
+    }
+}
+
+/// A rule name for simultaneous impacts that is not known.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown rule for simultaneous impacts `{0}` (expected one of: generalized-newton, sequential)"
+)]
+pub struct UnknownSimultaneous(pub String);
+
+impl std::str::FromStr for Simultaneous {
+    type Err = UnknownSimultaneous;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Simultaneous::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| UnknownSimultaneous(s.to_owned()))
     }
 }

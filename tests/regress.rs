@@ -402,3 +402,50 @@ fn a_rocking_ends_support_is_compared() {
         ("support", Some(a.impacts[k].t))
     );
 }
+
+/// Two equal pendulums striking head-on (Newton's cradle) have `m_nt = 0`, and with μ = 0
+/// the sign case of Table 1 follows the sign of its rounding (g = −m_nt, p = m_nt). A
+/// case that differs only because such a coefficient changed sign within the tolerances is
+/// the same impact ([P, Comment g]: the same solution either side); the same flip beyond
+/// the tolerances is a difference.
+#[test]
+fn a_sign_case_at_a_boundary_of_table_1_is_the_same_impact() {
+    use ricochet::impact::{Coefficients, ContactVelocity, ImpactMatrix};
+    let (_, a) = run_scene(&scene("newtons_cradle"), &RunOverrides::default(), 10).unwrap();
+    let tol = Tolerances {
+        rtol: 1e-8,
+        atol: 1e-12,
+        time_tol: 1e-9,
+    };
+    let flip = |nt: Real| {
+        let mut b = a.clone();
+        let r = &mut b.impacts[0];
+        r.w = ImpactMatrix { nt, ..r.w };
+        (r.g, r.p) = (-nt, nt);
+        let v_a = ContactVelocity {
+            n: r.v_a.n,
+            t: r.v_a.t,
+        };
+        r.case = Coefficients::new(&r.w, 0.0, v_a).sign_case().number();
+        b
+    };
+    let r0 = &a.impacts[0];
+    assert!(r0.w.nt.abs() < 1e-12 * r0.w.nn, "m_nt = {}", r0.w.nt);
+    // Within rounding of zero, the other sign: another case, the same impact.
+    let tiny = if r0.w.nt > 0.0 { -1e-16 } else { 1e-16 } * r0.w.nn;
+    let b = flip(tiny);
+    assert_ne!(b.impacts[0].case, a.impacts[0].case);
+    let c = compare(&a, &b, &tol);
+    assert!(c.within, "{:?}", c.first.map(|f| f.to_text()));
+    assert!(
+        c.notes.iter().any(|n| n.contains("Comment g")),
+        "{:?}",
+        c.notes
+    );
+    // The same flip of a real m_nt is a difference, in the case too.
+    let b = flip(tiny.signum() * 0.1 * r0.w.nn);
+    assert_ne!(b.impacts[0].case, a.impacts[0].case);
+    let c = compare(&a, &b, &tol);
+    assert!(!c.within);
+    assert_eq!(c.first.as_ref().unwrap().field, "case");
+}

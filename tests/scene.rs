@@ -23,7 +23,7 @@ fn load(name: &str) -> Scene {
     scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
-const SCENES: [(&str, &[&str]); 12] = [
+const SCENES: [(&str, &[&str]); 13] = [
     ("kane_double_pendulum", &["rodA.q", "rodB.q"]),
     ("pendulum_wall", &["pendulum.q"]),
     ("falling_rod", &["rod.x", "rod.y", "rod.theta"]),
@@ -41,6 +41,10 @@ const SCENES: [(&str, &[&str]); 12] = [
         &["wagon.x", "wagon.y", "wagon.theta", "front.q"],
     ),
     ("sled_rock", &["sled.x", "sled.y", "sled.theta"]),
+    (
+        "newtons_cradle",
+        &["ball1.q", "ball2.q", "ball3.q", "ball4.q", "ball5.q"],
+    ),
     (
         "chain",
         &[

@@ -273,6 +273,7 @@ fn simulate(d: &Drop) -> Option<Real> {
         t_end: d.t_max,
         output_rate: 0.0,
         max_drift: None,
+        simultaneous: Default::default(),
         integrator: IntegratorSettings::default(),
     };
     let mut sim = Simulation::new(&model, &settings, MaterialOverride::default()).unwrap();

@@ -80,6 +80,7 @@ fn off_centre_disc_collision_is_the_textbook_one() {
         t_end: 5.0,
         output_rate: 0.0,
         max_drift: None,
+        simultaneous: Default::default(),
         integrator: IntegratorSettings {
             rtol: 1e-12,
             atol: 1e-14,

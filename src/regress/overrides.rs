@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::impact::Law;
 use crate::integrate::Method;
 use crate::math::Real;
-use crate::settings::Settings;
+use crate::settings::{Settings, Simultaneous};
 use crate::sim::MaterialOverride;
 
 /// Overrides of a scene's settings and contact materials; `None` keeps the scene's.
@@ -40,6 +40,9 @@ pub struct RunOverrides {
     /// Energy-drift budget, relative, > 0 (see [`super::DriftCheck`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_drift: Option<Real>,
+    /// The rule for simultaneous impacts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simultaneous: Option<Simultaneous>,
 }
 
 /// An override out of its range.
@@ -97,6 +100,9 @@ impl RunOverrides {
             if let Some(v) = positive(field, value)? {
                 *target = v;
             }
+        }
+        if let Some(rule) = self.simultaneous {
+            settings.simultaneous = rule;
         }
         if let Some(b) = positive("max_drift", self.max_drift)? {
             settings.max_drift = Some(b);

@@ -97,7 +97,10 @@ pub(super) fn build(
             "the scene has no body: give at least one [[body]] (or a [chain])",
         ));
     }
-    let settings = settings(&file.run, loc)?;
+    let mut settings = settings(&file.run, loc)?;
+    if let Some(rule) = file.contact.as_ref().and_then(|c| c.get_ref().simultaneous) {
+        settings.simultaneous = rule;
+    }
     let mut b = Builder {
         loc,
         model: ModelBuilder::new(),

@@ -8,6 +8,7 @@ use toml::Spanned;
 use crate::impact::Law;
 use crate::integrate::Method;
 use crate::math::Real;
+use crate::settings::Simultaneous;
 
 use super::units::Quantity;
 
@@ -109,6 +110,9 @@ pub(super) struct ContactSpec {
     pub mu: Spanned<Real>,
     #[serde(default)]
     pub overlap_tolerance: Option<Spanned<Real>>,
+    /// The rule for simultaneous impacts.
+    #[serde(default)]
+    pub simultaneous: Option<Simultaneous>,
     #[serde(default)]
     pub pair: Vec<PairSpec>,
 }

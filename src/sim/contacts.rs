@@ -43,6 +43,7 @@ use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Mode};
 use crate::math::{Real, Vec2};
 use crate::model::{Material, PairId};
+use crate::settings::Simultaneous;
 
 /// The most rounds of impacts and mode changes at one instant.
 const MAX_ROUNDS: usize = 100;
@@ -99,83 +100,69 @@ impl Simulation<'_> {
         event: Option<&Event>,
         observer: &mut dyn Observer,
     ) -> Result<(bool, Option<StopReason>), SimError> {
-        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let mut changed = false;
         let mut impacts_here = 0usize;
         let mut painleve_resolved = false;
-        let mut accumulation_ended = false;
+        // The impacts so far at this instant, group by group (see `coupling`).
+        let mut groups: Vec<GroupImpacts> = Vec::new();
+        let mut settled = false;
         for _ in 0..MAX_ROUNDS {
             let touching = self.touching(t, y)?;
-            let approaching: Vec<Touch> = (touching.iter())
-                .filter(|p| p.v_n < -p.still)
-                .copied()
-                .collect();
-            // 1. Impacts.
-            if !approaching.is_empty() {
+            let group = (self.coupling).groups(self.model, touching.iter().map(|p| p.pair));
+            let approaching = |i: usize| touching[i].v_n < -touching[i].still;
+            // 1. Impacts, in each group of coupled points with an approaching point; the
+            // groups are separate problems.
+            let mut ids: Vec<usize> = Vec::new();
+            for i in (0..touching.len()).filter(|&i| approaching(i)) {
+                if !ids.contains(&group[i]) {
+                    ids.push(group[i]);
+                }
+            }
+            if !ids.is_empty() {
                 if impacts_here == 0 {
                     self.sample(t, y, true, observer)?;
                 }
-                let single = approaching.len() == 1
-                    && (impacts_here == 0
-                        || self.points_below(&touching, self.scales.v_tiny).len() == 1);
-                let u_before = y[n..nqu].to_vec();
-                // Once an accumulation ended at this instant, the impacts in cascade that
-                // follow (the other end of a rod landing flat) are plastic too.
-                let mut events = self.impact_round(
-                    t,
-                    y,
-                    &touching,
-                    &approaching,
-                    single,
-                    accumulation_ended,
-                    observer,
-                )?;
-                // 2. Accumulations: an impact that leaves a touching point separating too
-                // slowly for its hop to be resolved is made plastic.
-                if !accumulation_ended {
-                    let after = self.touching(t, y)?;
-                    let slow = self.slow_separations(t, y, &after)?;
-                    if !slow.is_empty() {
-                        self.note_accumulations(t, &slow);
-                        y[n..nqu].copy_from_slice(&u_before);
-                        let single = single && slow.iter().all(|p| p.pair == approaching[0].pair);
-                        events = self.impact_round(
-                            t,
-                            y,
-                            &touching,
-                            &approaching,
-                            single,
-                            true,
-                            observer,
-                        )?;
-                        accumulation_ended = true;
-                        // A rocking body: the plastic impact lifts another touching point,
-                        // too slowly to resolve; no impulse ≥ 0 holds it down.
-                        let after = self.touching(t, y)?;
-                        if !self.slow_separations(t, y, &after)?.is_empty() {
-                            let held: Vec<Touch> = (after.iter())
-                                .filter(|p| p.v_n <= self.scales.v_rest.max(p.still))
-                                .copied()
-                                .collect();
-                            let points = self.points_below(&held, self.scales.v_rest);
-                            let (q, u) = y[..nqu].split_at_mut(n);
-                            let mut closing =
-                                self.map
-                                    .close(self.model, &points, self.scales.v_rest, t, q, u)?;
-                            self.support(t, y, &held, &mut closing)?;
-                            events.extend(closing);
+                let mut events = Vec::new();
+                for id in ids {
+                    let members: Vec<Touch> = (0..touching.len())
+                        .filter(|&i| group[i] == id)
+                        .map(|i| touching[i])
+                        .collect();
+                    let k = match groups.iter().position(|g| g.id == id) {
+                        Some(k) => k,
+                        None => {
+                            groups.push(GroupImpacts {
+                                id,
+                                impacts: 0,
+                                ended: false,
+                            });
+                            groups.len() - 1
                         }
-                    }
-                }
-                impacts_here += events.len();
-                if let Some(stop) = self.ledger(t, events, observer)? {
-                    return Ok((true, Some(stop)));
+                    };
+                    let mut state = groups[k];
+                    events.extend(self.group_impacts(t, y, &members, &mut state, observer)?);
+                    groups[k] = state;
                 }
                 changed = true;
-                continue;
+                // A round whose laws gave no impulse (points that approach by rounding
+                // noise only) goes on to the modes; it used to repeat until the rounds ran
+                // out, and the modes were not selected.
+                if !events.is_empty() {
+                    impacts_here += events.len();
+                    if let Some(stop) = self.ledger(t, events, observer)? {
+                        return Ok((true, Some(stop)));
+                    }
+                    continue;
+                }
             }
-            if impacts_here > 0 && !accumulation_ended {
-                self.remember_hops(t, &touching);
+            // The hops that start in the groups that had impacts (unless their
+            // accumulation ended).
+            let hops: Vec<Touch> = (0..touching.len())
+                .filter(|&i| (groups.iter()).any(|g| g.id == group[i] && g.impacts > 0 && !g.ended))
+                .map(|i| touching[i])
+                .collect();
+            if !hops.is_empty() {
+                self.remember_hops(t, &hops);
             }
             // 3. Modes of the touching points that do not separate.
             let resting: Vec<Touch> = (touching.iter())
@@ -194,6 +181,7 @@ impl Simulation<'_> {
                     if impacts_here == 0 && !painleve_resolved {
                         self.disarm_open_crossing(event, before, &touching);
                     }
+                    settled = true;
                     break;
                 }
                 Selected::Painleve(point) => {
@@ -212,6 +200,15 @@ impl Simulation<'_> {
                     changed = true;
                 }
             }
+        }
+        if !settled {
+            return Err(SimError::Contact {
+                t,
+                message: format!(
+                    "the impacts and contact modes at this instant did not settle in \
+                     {MAX_ROUNDS} rounds ({impacts_here} impacts)"
+                ),
+            });
         }
         if impacts_here > 0 {
             self.sample(t, y, true, observer)?;
@@ -365,18 +362,115 @@ impl Simulation<'_> {
         }
     }
 
-    /// One round of impacts at `t` on the touching points, `approaching` among them: the
-    /// one-point law of the scene when `single`, else Moreau's generalized Newton law over
-    /// the touching points that do not separate; `u` (in `y`) becomes `u⁺`. `plastic`: the
-    /// same law with `e = 0`, reported as the end of an accumulation.
+    /// The impacts of one group of coupled points at `t` (`touching`: the group's touching
+    /// points, some approaching), with the accumulations they end; `u` (in `y`) becomes
+    /// `u⁺`. `state` counts the group's impacts at this instant.
+    ///
+    /// Which law: a point that approaches alone, as the first impact of its group at this
+    /// instant (or with no other point of the group touching), gets the scene's one-point
+    /// law [P]. Otherwise — several approach at once, or an impact made another touching
+    /// point approach (a rod landing on one end strikes with the other) — the scene's rule
+    /// for simultaneous impacts: Moreau's generalized Newton law over the group's touching
+    /// points that do not separate, or (sequential) the one-point law on the most
+    /// approaching point, the rounds that follow taking the next one.
+    fn group_impacts(
+        &mut self,
+        t: Real,
+        y: &mut [Real],
+        touching: &[Touch],
+        state: &mut GroupImpacts,
+        observer: &mut dyn Observer,
+    ) -> Result<Vec<ImpactEvent>, SimError> {
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let approaching: Vec<Touch> = (touching.iter())
+            .filter(|p| p.v_n < -p.still)
+            .copied()
+            .collect();
+        let sequential = self.settings.simultaneous == Simultaneous::Sequential;
+        let chosen = if sequential {
+            (approaching.iter())
+                .min_by(|a, b| a.v_n.total_cmp(&b.v_n))
+                .copied()
+        } else {
+            let alone = approaching.len() == 1
+                && (state.impacts == 0
+                    || self.points_below(touching, self.scales.v_tiny).len() == 1);
+            alone.then(|| approaching[0])
+        };
+        let u_before = y[n..nqu].to_vec();
+        // Once an accumulation ended at this instant, the impacts in cascade that follow
+        // (the other end of a rod landing flat) are plastic too.
+        let mut events = self.impact_round(
+            t,
+            y,
+            touching,
+            approaching.len(),
+            chosen,
+            state.ended,
+            observer,
+        )?;
+        // 2. Accumulations: an impact that leaves a touching point separating too slowly
+        // for its hop to be resolved is made plastic.
+        if !state.ended {
+            let after = self.touching_in(t, y, state.id)?;
+            let slow = self.slow_separations(t, y, &after)?;
+            if !slow.is_empty() {
+                self.note_accumulations(t, &slow);
+                y[n..nqu].copy_from_slice(&u_before);
+                // A slow separation elsewhere than at the struck point: the plastic impact
+                // takes the whole group (the generalized law), or stays one point at a time.
+                let chosen = if sequential {
+                    chosen
+                } else {
+                    chosen.filter(|c| slow.iter().all(|p| p.pair == c.pair))
+                };
+                events =
+                    self.impact_round(t, y, touching, approaching.len(), chosen, true, observer)?;
+                state.ended = true;
+                // A rocking body: the plastic impact lifts another touching point, too
+                // slowly to resolve; no impulse ≥ 0 holds it down.
+                let after = self.touching_in(t, y, state.id)?;
+                if !self.slow_separations(t, y, &after)?.is_empty() {
+                    let held: Vec<Touch> = (after.iter())
+                        .filter(|p| p.v_n <= self.scales.v_rest.max(p.still))
+                        .copied()
+                        .collect();
+                    let points = self.points_below(&held, self.scales.v_rest);
+                    let (q, u) = y[..nqu].split_at_mut(n);
+                    let mut closing =
+                        (self.map).close(self.model, &points, self.scales.v_rest, t, q, u)?;
+                    self.support(t, y, &held, &mut closing)?;
+                    events.extend(closing);
+                }
+            }
+        }
+        state.impacts += events.len();
+        Ok(events)
+    }
+
+    /// The touching points at `(t, y)` of the group `id` of coupled points.
+    fn touching_in(&mut self, t: Real, y: &[Real], id: usize) -> Result<Vec<Touch>, SimError> {
+        let touching = self.touching(t, y)?;
+        let group = (self.coupling).groups(self.model, touching.iter().map(|p| p.pair));
+        Ok((touching.into_iter().zip(group))
+            .filter(|(_, g)| *g == id)
+            .map(|(p, _)| p)
+            .collect())
+    }
+
+    /// One round of impacts at `t` on the `touching` points of a group, `approaching` of
+    /// them approaching: the one-point law of the scene on `chosen`, else Moreau's
+    /// generalized Newton law over the touching points that do not separate; `u` (in `y`)
+    /// becomes `u⁺`. `plastic`: the same law with `e = 0`, reported as the end of an
+    /// accumulation.
     #[allow(clippy::too_many_arguments)]
     fn impact_round(
         &mut self,
         t: Real,
         y: &mut [Real],
         touching: &[Touch],
-        approaching: &[Touch],
-        single: bool,
+        approaching: usize,
+        chosen: Option<Touch>,
         plastic: bool,
         observer: &mut dyn Observer,
     ) -> Result<Vec<ImpactEvent>, SimError> {
@@ -387,8 +481,7 @@ impl Simulation<'_> {
             p.2 = plastic_material(p.2);
         }
         let (q, u) = y[..nqu].split_at_mut(n);
-        let mut events: Vec<ImpactEvent> = if single {
-            let p = approaching[0];
+        let mut events: Vec<ImpactEvent> = if let Some(p) = chosen {
             let material = plastic_material(self.material(p.pair));
             let ev = self
                 .map
@@ -398,7 +491,7 @@ impl Simulation<'_> {
             // Several points approach at once, or an impact made another touching point
             // approach (a rod landing on one end strikes with the other).
             if !plastic {
-                let what = if approaching.len() > 1 {
+                let what = if approaching > 1 {
                     "simultaneous impact"
                 } else {
                     "impacts in cascade at one instant"
@@ -939,6 +1032,18 @@ fn most_open(solutions: &[lcp::Solution]) -> Vec<&lcp::Solution> {
     let mut ranked: Vec<&lcp::Solution> = solutions.iter().collect();
     ranked.sort_by_key(|s| std::cmp::Reverse(s.modes.iter().filter(|m| **m == Mode::Open).count()));
     ranked
+}
+
+/// The impacts of one group of coupled contact points at the current instant.
+#[derive(Clone, Copy, Debug)]
+struct GroupImpacts {
+    /// The group's name (see [`super::coupling::Coupling::groups`]).
+    id: usize,
+    /// The impacts so far.
+    impacts: usize,
+    /// An accumulation of impacts ended in it: the impacts in cascade that follow are
+    /// plastic.
+    ended: bool,
 }
 
 /// An accumulation of impacts that ended on a pair at the current instant: what the

@@ -21,6 +21,7 @@
 
 mod accumulation;
 mod contacts;
+mod coupling;
 mod error;
 pub mod gaps;
 mod impact_map;
@@ -65,6 +66,8 @@ pub struct Simulation<'m> {
     stepper: AnyStepper,
     locator: EventLocator,
     map: ImpactMap,
+    /// Which contact points are coupled (solved together at an instant).
+    coupling: coupling::Coupling,
     /// Scratch for samples.
     sampler: Data,
     /// Armed event functions (see [`gaps::slot`]).
@@ -133,6 +136,7 @@ impl<'m> Simulation<'m> {
             system,
             gaps: GapFunctions::new(model, scales),
             map: ImpactMap::new(model).with_still(scales.v_drift),
+            coupling: coupling::Coupling::new(model),
             sampler: Data::new(model),
             armed: vec![false; gaps::SLOTS * npairs],
             disarmed: vec![false; npairs],

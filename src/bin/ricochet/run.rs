@@ -15,6 +15,7 @@ use ricochet::log::{LogOptions, LogWriter, RunLogger};
 use ricochet::math::Real;
 use ricochet::model::Model;
 use ricochet::regress::{Collector, DriftCheck, RunOverrides};
+use ricochet::settings::Simultaneous;
 use ricochet::sim::{
     ImpactEvent, Level, MaterialOverride, MoreauJean, Observer, ObserverError, RunSummary, Sample,
     Simulation, StopReason,
@@ -78,6 +79,11 @@ pub struct OverrideArgs {
     /// log.
     #[arg(long, allow_negative_numbers = true)]
     max_drift: Option<Real>,
+    /// The rule for simultaneous impacts of coupled contact points: generalized-newton
+    /// (Moreau's law over the touching points at once) or sequential (the one-point law,
+    /// one point at a time), instead of the scene's `[contact] simultaneous`.
+    #[arg(long)]
+    simultaneous: Option<Simultaneous>,
 }
 
 impl OverrideArgs {
@@ -93,6 +99,7 @@ impl OverrideArgs {
             atol: self.atol,
             dt: self.dt,
             max_drift: self.max_drift,
+            simultaneous: self.simultaneous,
         }
     }
 }

@@ -1,0 +1,108 @@
+//! Which contact points are coupled: the groups of points whose rows of
+//! `W = J M⁻¹ Jᵀ` couple, solved together at an instant; points of different groups are
+//! separate problems.
+//!
+//! The speeds that move a body are those of the joints on its path from the world. Two
+//! bodies' motions share a speed exactly when their paths share a joint with a free
+//! coordinate, i.e. when they have the same *coupling root*: the topmost body on the path
+//! (the body itself included) whose joint has a free coordinate. In a tree `M` is
+//! block-diagonal between different roots, so is `M⁻¹`, and a contact point, which
+//! involves the bodies of its pair's two colliders, couples with another exactly when their
+//! bodies' roots are linked through a chain of points. A body whose path has no free
+//! coordinate (a fixed or driven body) has no root: it moves, if at all, by its drive, and
+//! couples nothing. (The nonholonomic constraints act between the speeds of one path:
+//! they do not couple other bodies.)
+//!
+//! Seven balls landing on a floor at one instant are seven groups of one point each, so
+//! each gets the paper's one-point law, exactly as if it fell alone.
+
+use std::collections::HashMap;
+
+use crate::model::{BodyId, Model, PairId};
+
+/// The coupling root of every body (see the module doc).
+#[derive(Clone, Debug)]
+pub struct Coupling {
+    root: Vec<Option<usize>>,
+}
+
+impl Coupling {
+    /// The coupling roots of `model`'s bodies.
+    pub fn new(model: &Model) -> Self {
+        let free = |b: BodyId| {
+            let j = &model.joints()[b.index()];
+            j.drive.is_none() && j.kind.ndof() > 0
+        };
+        let root = (model.body_ids())
+            .map(|b| {
+                std::iter::once(b)
+                    .chain(model.ancestors(b))
+                    .filter(|&a| free(a))
+                    .last()
+                    .map(BodyId::index)
+            })
+            .collect();
+        Self { root }
+    }
+
+    /// The coupling roots of the two bodies of `pair` (`None` for an obstacle or a body
+    /// without a free coordinate on its path).
+    fn roots(&self, model: &Model, pair: PairId) -> [Option<usize>; 2] {
+        let p = &model.pairs()[pair.index()];
+        let root = |c: crate::model::ColliderId| {
+            model.colliders()[c.index()]
+                .body
+                .and_then(|b| self.root[b.index()])
+        };
+        [root(p.a), root(p.b)]
+    }
+
+    /// The group of each point of `pairs` (one entry per point, several points may share a
+    /// pair): points in one group are coupled, directly or through other points of the
+    /// list. A group is named by its smallest coupling root (a body index), so the names
+    /// stay the same as long as the same bodies touch; a point of two bodies without a root
+    /// is a group of its own, named `usize::MAX − i`.
+    pub fn groups(&self, model: &Model, pairs: impl Iterator<Item = PairId>) -> Vec<usize> {
+        // Union–find over the roots that appear.
+        let mut slot: HashMap<usize, usize> = HashMap::new();
+        let mut parent: Vec<usize> = Vec::new();
+        let mut name: Vec<usize> = Vec::new();
+        fn find(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
+            }
+            i
+        }
+        let points: Vec<[Option<usize>; 2]> = pairs.map(|p| self.roots(model, p)).collect();
+        for roots in &points {
+            let mut first: Option<usize> = None;
+            for r in roots.iter().flatten() {
+                let s = *slot.entry(*r).or_insert_with(|| {
+                    parent.push(parent.len());
+                    name.push(*r);
+                    parent.len() - 1
+                });
+                match first {
+                    None => first = Some(s),
+                    Some(f) => {
+                        let (a, b) = (find(&mut parent, f), find(&mut parent, s));
+                        if a != b {
+                            let (keep, drop) = if name[a] <= name[b] { (a, b) } else { (b, a) };
+                            parent[drop] = keep;
+                        }
+                    }
+                }
+            }
+        }
+        (points.iter().enumerate())
+            .map(|(i, roots)| match roots.iter().flatten().next() {
+                Some(r) => {
+                    let s = find(&mut parent, slot[r]);
+                    name[s]
+                }
+                None => usize::MAX - i,
+            })
+            .collect()
+    }
+}
