@@ -201,7 +201,7 @@ fn p_matrix(rng: &mut Rng, k: usize) -> DMatrix<f64> {
 }
 
 /// The LCP's defining conditions on random P-matrix problems of 4 to 256 variables: a
-/// P-matrix LCP has exactly one solution and Lemke's algorithm finds it [CPS, Thm 4.4.8],
+/// P-matrix LCP has exactly one solution and Lemke's algorithm finds it [CPS, §3.3, §4.4],
 /// so every run must end `Solved` with `z ≥ 0` (exactly: the solver clips rounding),
 /// `w = M z + q ≥ 0` and `z_i w_i = 0`, to `1e-11` of the scale `max|q| + max|M| max|z|`:
 /// the backward error of a pivoting solve is a few ulps times the growth of `B⁻¹` (here

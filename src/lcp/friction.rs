@@ -40,7 +40,7 @@
 //! when `A` is positive semidefinite (`zᵀMz = yᵀAy + Σ μ σ x_n ≥ 0`, `y = (x_n, x_t)`),
 //! but not copositive-plus, so ray termination proves that no solution exists only when
 //! `b` is such that `bᵀy ≥ 0` for every `y` of `A`'s null space inside the friction cones
-//! ([CPS, Thm 3.8.6 and §4.4]): true when `b` is in the range of `A` (`b = J v`, the
+//! ([CPS, §3.8 and §4.4]): true when `b` is in the range of `A` (`b = J v`, the
 //! velocity level with one restitution coefficient, the frictionless problem, `A`
 //! regular). Otherwise, with redundant contacts wedged against each other, a sliding
 //! solution can exist that Lemke's path misses; `tests/lcp_lemke.rs` measures how often.

@@ -5,7 +5,7 @@
 //! find z ∈ ℝⁿ:   w = M z + q ≥ 0,   z ≥ 0,   wᵀ z = 0
 //! ```
 //!
-//! **Scheme 1 of [CPS, Alg. 4.4.1]**: the augmented system `w = M z + d z₀ + q` with the
+//! **Scheme 1 of [CPS, §4.4]**: the augmented system `w = M z + d z₀ + q` with the
 //! covering vector `d = 1` (every component positive, so the starting point `z = 0`,
 //! `z₀ = −min q` is feasible; the problem is first scaled to `max|M| = max|q| = 1`, so that
 //! `d = 1` weighs all rows alike). `z₀` enters, the row of the most negative `q` leaves;
@@ -13,7 +13,7 @@
 //! variable that leaves, until `z₀` leaves (a solution, `z₀ = 0`) or the entering column
 //! has no positive entry (**ray termination**: an unbounded edge of the augmented
 //! problem). For a copositive-plus `M` (positive semidefinite ones included) ray
-//! termination proves that the LCP has no feasible point [CPS, Thm 4.4.13]; for other
+//! termination proves that the LCP has no feasible point [CPS, §4.4]; for other
 //! matrices it only says that Lemke's path did not find a solution.
 //!
 //! **Lexicographic minimum ratio test** [CPS, §4.9]: among the rows that tie in the ratio
@@ -143,7 +143,7 @@ impl Lemke {
         &self.w[..self.n]
     }
 
-    /// Solves LCP(q, M) by Lemke's algorithm (scheme 1 of [CPS, Alg. 4.4.1], covering vector
+    /// Solves LCP(q, M) by Lemke's algorithm (scheme 1 of [CPS, §4.4], covering vector
     /// `d = 1`, lexicographic ratio test). On [`LemkeStatus::Solved`] the solution is in
     /// [`Lemke::z`] and [`Lemke::w`]: `z ≥ 0` exactly (entries that rounding left at
     /// `−1e-16` are set to 0) and `w = M z + q`, `w ≥ 0` and `wᵀz = 0` to rounding.
