@@ -1,0 +1,442 @@
+//! Lemke's complementary pivoting algorithm for the standard linear complementarity
+//! problem LCP(q, M) [CPS, §4.4]:
+//!
+//! ```text
+//! find z ∈ ℝⁿ:   w = M z + q ≥ 0,   z ≥ 0,   wᵀ z = 0
+//! ```
+//!
+//! **Scheme 1 of [CPS, §4.4]**: the augmented system `w = M z + d z₀ + q` with the
+//! covering vector `d = 1` (every component positive, so the starting point `z = 0`,
+//! `z₀ = −min q` is feasible; the problem is first scaled to `max|M| = max|q| = 1`, so that
+//! `d = 1` weighs all rows alike). `z₀` enters, the row of the most negative `q` leaves;
+//! then the complement of the variable that left enters, and the ratio test picks the
+//! variable that leaves, until `z₀` leaves (a solution, `z₀ = 0`) or the entering column
+//! has no positive entry (**ray termination**: an unbounded edge of the augmented
+//! problem). For a copositive-plus `M` (positive semidefinite ones included) ray
+//! termination proves that the LCP has no feasible point [CPS, §4.4]; for other
+//! matrices it only says that Lemke's path did not find a solution.
+//!
+//! **Lexicographic minimum ratio test** [CPS, §4.9]: among the rows that tie in the ratio
+//! `x_B,i / col_i`, the one whose row of `[x_B | B⁻¹] / col_i` is lexicographically
+//! smallest leaves. Since `B⁻¹` is regular no two such rows are equal, so the choice is
+//! unique and no basis repeats: Lemke's path cannot cycle, even on degenerate problems
+//! (redundant contact rows, `q_i = 0`). When `z₀` is among the rows tied in the first
+//! column it leaves at once (a solution, the usual practice of PATH and Drake).
+//!
+//! **Numerics.** The revised form: the workspace keeps `B⁻¹` (n × n, row-major) and the
+//! basic values `x_B = B⁻¹ q`, updated by one Gauss–Jordan step per pivot (`2n²` flops),
+//! and computes the entering column `B⁻¹ a_e` on demand (`n²`). Tolerances are relative:
+//! the problem is scaled to `max|M| = max|q| = 1`, an entry of the entering column counts
+//! as positive above [`PIVOT_TOL`] times the column's largest, ratios tie within
+//! [`TIE_TOL`]. At the end two steps of iterative refinement with the basis' own columns
+//! (`x_B += B⁻¹ (q − B x_B)`) remove the rounding that the pivots accumulated, and
+//! `w = M z + q` is computed from the original data.
+//!
+//! **Why not a crate.** Searched (2026): no maintained Rust crate implements Lemke's
+//! algorithm. `lemke-rs` (GitHub megesdal/lemke-rs, a port of GameTheoryExplorer's
+//! exact-rational Lemke for bimatrix games) has no release on crates.io; the LP crates
+//! (`good_lp`, `minilp`/`microlp`, `rustplex`) solve linear programs, not LCPs; the
+//! maintained implementations are C++ (Drake's `UnrevisedLemkeSolver`, DART, Siconos,
+//! PATH). Lemke with a lexicographic rule is ~300 lines on nalgebra's types, so it is
+//! written here, with the allocation-free workspace the simulation loop wants.
+//!
+//! Reference: **[CPS]** R. W. Cottle, J.-S. Pang, R. E. Stone, *The Linear Complementarity
+//! Problem*, Academic Press (1992), §4.4 (Lemke's method), §4.9 (degeneracy, lexicographic
+//! pivoting).
+
+use nalgebra::{Dim, Matrix, RawStorage, U1};
+
+use crate::math::Real;
+
+/// An entry of the entering column counts as positive (a pivot candidate) above this
+/// fraction of the column's largest magnitude (scaled problem). Below it the entry is
+/// rounding of a zero: pivoting on it would blow up `B⁻¹`.
+pub const PIVOT_TOL: Real = 1e-11;
+
+/// Two ratios of the ratio test tie within this relative difference (scaled problem).
+pub const TIE_TOL: Real = 1e-11;
+
+/// How a run of Lemke's algorithm ended (outcomes, not failures: see [`LemkeError`] for
+/// bad input).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LemkeStatus {
+    /// `z₀` left the basis: [`Lemke::z`] and [`Lemke::w`] solve the LCP.
+    Solved {
+        /// Pivots made (0 when `q ≥ 0`: `z = 0`).
+        pivots: usize,
+    },
+    /// The entering column had no positive entry: an unbounded ray of the augmented
+    /// problem. For copositive-plus `M`, the LCP has no solution.
+    RayTermination {
+        /// Pivots made before the ray.
+        pivots: usize,
+    },
+    /// The pivot limit ([`Lemke::max_pivots`]) was reached first.
+    PivotLimit {
+        /// Pivots made.
+        pivots: usize,
+    },
+}
+
+/// Input Lemke's algorithm cannot take.
+#[derive(thiserror::Error, Clone, Debug, PartialEq)]
+pub enum LemkeError {
+    /// `M` is not square, or `q` does not match it.
+    #[error("Lemke: M is {rows}×{cols} and q has {q} entries (M must be n×n, q n)")]
+    Shape {
+        /// Rows of `M`.
+        rows: usize,
+        /// Columns of `M`.
+        cols: usize,
+        /// Entries of `q`.
+        q: usize,
+    },
+    /// `M` or `q` has a NaN or an infinite entry.
+    #[error("Lemke: M or q is not finite")]
+    NotFinite,
+    /// The covering vector does not have `n` positive finite entries.
+    #[error("Lemke: the covering vector must have n positive finite entries")]
+    Cover,
+}
+
+/// The workspace of Lemke's algorithm: its buffers grow to the largest problem solved and
+/// are reused, so that a warmed-up workspace solves without allocating.
+#[derive(Clone, Debug, Default)]
+pub struct Lemke {
+    /// Problem size `n`.
+    n: usize,
+    /// The most pivots of one run; `None`: `max(1000, 50 n)`.
+    pub max_pivots: Option<usize>,
+    /// `B⁻¹` (n × n, row-major).
+    binv: Vec<Real>,
+    /// Basic values `x_B = B⁻¹ q̂` (n).
+    xb: Vec<Real>,
+    /// The variable of each basis row: `0..n` is `w_i`, `n..2n` is `z_j`, `2n` is `z₀`.
+    basis: Vec<usize>,
+    /// The entering column `B⁻¹ a_e` (n).
+    col: Vec<Real>,
+    /// The covering vector `d` (n).
+    cover: Vec<Real>,
+    /// Scratch: the residual of the refinement, then the rows tied in the ratio test (n).
+    scratch: Vec<Real>,
+    /// Tied rows of the ratio test.
+    ties: Vec<usize>,
+    /// The solution `z` (n).
+    z: Vec<Real>,
+    /// `w = M z + q` (n).
+    w: Vec<Real>,
+}
+
+impl Lemke {
+    /// An empty workspace.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The solution `z` of the last run that ended in [`LemkeStatus::Solved`] (n).
+    pub fn z(&self) -> &[Real] {
+        &self.z[..self.n]
+    }
+
+    /// `w = M z + q` of the last solved run, computed from `M` and `q` (n).
+    pub fn w(&self) -> &[Real] {
+        &self.w[..self.n]
+    }
+
+    /// Solves LCP(q, M) by Lemke's algorithm (scheme 1 of [CPS, §4.4], covering vector
+    /// `d = 1`, lexicographic ratio test). On [`LemkeStatus::Solved`] the solution is in
+    /// [`Lemke::z`] and [`Lemke::w`]: `z ≥ 0` exactly (entries that rounding left at
+    /// `−1e-16` are set to 0) and `w = M z + q`, `w ≥ 0` and `wᵀz = 0` to rounding.
+    pub fn solve<R, C, S, QS>(
+        &mut self,
+        m: &Matrix<Real, R, C, S>,
+        q: &Matrix<Real, R, U1, QS>,
+    ) -> Result<LemkeStatus, LemkeError>
+    where
+        R: Dim,
+        C: Dim,
+        S: RawStorage<Real, R, C>,
+        QS: RawStorage<Real, R, U1>,
+    {
+        self.solve_covered(m, q, None)
+    }
+
+    /// [`Lemke::solve`] with the covering vector `d` (n entries, positive and finite; `None`:
+    /// `d = 1`), for the scaled problem (`max|M| = max|q| = 1`). Another `d` follows another
+    /// path: on a matrix that is not copositive, one may reach a solution where `d = 1`
+    /// ended on a ray.
+    pub fn solve_covered<R, C, S, QS>(
+        &mut self,
+        m: &Matrix<Real, R, C, S>,
+        q: &Matrix<Real, R, U1, QS>,
+        d: Option<&[Real]>,
+    ) -> Result<LemkeStatus, LemkeError>
+    where
+        R: Dim,
+        C: Dim,
+        S: RawStorage<Real, R, C>,
+        QS: RawStorage<Real, R, U1>,
+    {
+        let n = q.nrows();
+        if m.nrows() != n || m.ncols() != n {
+            return Err(LemkeError::Shape {
+                rows: m.nrows(),
+                cols: m.ncols(),
+                q: n,
+            });
+        }
+        if !m.iter().chain(q.iter()).all(|v| v.is_finite()) {
+            return Err(LemkeError::NotFinite);
+        }
+        if let Some(d) = d
+            && (d.len() != n || !d.iter().all(|&v| v.is_finite() && v > 0.0))
+        {
+            return Err(LemkeError::Cover);
+        }
+        self.reserve(n);
+        match d {
+            Some(d) => self.cover[..n].copy_from_slice(d),
+            None => self.cover[..n].fill(1.0),
+        }
+        // q ≥ 0: z = 0 solves it.
+        let sq = q.iter().fold(0.0 as Real, |acc, v| acc.max(v.abs()));
+        if q.iter().all(|&v| v >= 0.0) {
+            self.z[..n].fill(0.0);
+            for (w, &v) in self.w.iter_mut().zip(q.iter()) {
+                *w = v;
+            }
+            return Ok(LemkeStatus::Solved { pivots: 0 });
+        }
+        // Scale to max|M̂| = max|q̂| = 1: M̂ = M / sm, q̂ = q / sq; then z = ẑ sq / sm.
+        let sm = m.iter().fold(0.0 as Real, |acc, v| acc.max(v.abs()));
+        let sm = if sm > 0.0 { sm } else { 1.0 };
+        self.start(q, sq);
+        let max_pivots = self.max_pivots.unwrap_or(1000.max(50 * n));
+        let z0 = 2 * n;
+        // z₀ enters; the row of the most negative q̂ leaves (the lexicographic minimum of
+        // [q̂_i, e_i] / d_i: col = −d = −1, all entries negative, so the test takes |col|).
+        let mut entering = z0;
+        self.column(m, sm, entering);
+        let mut pivots = 0;
+        let mut leave = self.ratio_test(true);
+        loop {
+            let Some(r) = leave else {
+                return Ok(LemkeStatus::RayTermination { pivots });
+            };
+            if pivots == max_pivots {
+                return Ok(LemkeStatus::PivotLimit { pivots });
+            }
+            let left = self.pivot(r, entering);
+            pivots += 1;
+            if left == z0 {
+                break;
+            }
+            // The complement of the variable that left enters.
+            entering = if left < n { left + n } else { left - n };
+            self.column(m, sm, entering);
+            leave = self.ratio_test(false);
+        }
+        self.refine(m, q, sm, sq);
+        self.refine(m, q, sm, sq);
+        self.extract(m, q, sm, sq);
+        Ok(LemkeStatus::Solved { pivots })
+    }
+
+    /// Grows the buffers to size `n` (no allocation once they have been that large).
+    fn reserve(&mut self, n: usize) {
+        self.n = n;
+        self.binv.resize(n * n, 0.0);
+        for v in [
+            &mut self.xb,
+            &mut self.col,
+            &mut self.cover,
+            &mut self.scratch,
+            &mut self.z,
+            &mut self.w,
+        ] {
+            v.resize(n, 0.0);
+        }
+        self.basis.resize(n, 0);
+        self.ties.clear();
+        self.ties.reserve(n);
+    }
+
+    /// The starting basis: every `w_i` basic, `B = I`, `x_B = q̂`.
+    fn start<R: Dim, QS: RawStorage<Real, R, U1>>(
+        &mut self,
+        q: &Matrix<Real, R, U1, QS>,
+        sq: Real,
+    ) {
+        let n = self.n;
+        self.binv[..n * n].fill(0.0);
+        for i in 0..n {
+            self.binv[i * n + i] = 1.0;
+            self.xb[i] = q[i] / sq;
+            self.basis[i] = i;
+        }
+    }
+
+    /// The entering column `col = B⁻¹ a_e` of variable `e`, where the augmented system is
+    /// `I w − M̂ z − d z₀ = q̂`: `a_e = e_j` for `w_j`, `−M̂_:j` for `z_j`, `−d` for `z₀`.
+    fn column<R: Dim, C: Dim, S: RawStorage<Real, R, C>>(
+        &mut self,
+        m: &Matrix<Real, R, C, S>,
+        sm: Real,
+        e: usize,
+    ) {
+        let n = self.n;
+        for i in 0..n {
+            let row = &self.binv[i * n..(i + 1) * n];
+            self.col[i] = if e < n {
+                row[e]
+            } else if e < 2 * n {
+                let j = e - n;
+                -(0..n).map(|k| row[k] * m[(k, j)]).sum::<Real>() / sm
+            } else {
+                -row.iter()
+                    .zip(&self.cover[..n])
+                    .map(|(a, d)| a * d)
+                    .sum::<Real>()
+            };
+        }
+    }
+
+    /// The lexicographic minimum ratio test [CPS, §4.9]: the row `r` that leaves when the
+    /// entering variable's column is `col`. Rows with `col_i > PIVOT_TOL · max|col|` are
+    /// candidates (`initial`: every row, by `|col_i|`, the first pivot of `z₀`); among those
+    /// tied in `x_B,i / col_i`, `z₀`'s row if it is one, else the lexicographic minimum of
+    /// the rows of `B⁻¹ / col_i`, column by column. `None`: no candidate, ray termination.
+    fn ratio_test(&mut self, initial: bool) -> Option<usize> {
+        let n = self.n;
+        let z0 = 2 * n;
+        let cmax = self.col.iter().fold(0.0 as Real, |a, v| a.max(v.abs()));
+        let piv = |c: Real| {
+            if initial {
+                c.abs()
+            } else if c > PIVOT_TOL * cmax {
+                c
+            } else {
+                0.0
+            }
+        };
+        // The minimum ratio, and the rows that tie with it.
+        let mut min = Real::INFINITY;
+        for i in 0..n {
+            let c = piv(self.col[i]);
+            if c > 0.0 {
+                min = min.min(self.xb[i] / c);
+            }
+        }
+        if !min.is_finite() {
+            return None;
+        }
+        let tie = |a: Real, b: Real| (a - b).abs() <= TIE_TOL * (1.0 + a.abs().max(b.abs()));
+        self.ties.clear();
+        for i in 0..n {
+            let c = piv(self.col[i]);
+            if c > 0.0 && tie(self.xb[i] / c, min) {
+                self.ties.push(i);
+            }
+        }
+        if let Some(&r) = self.ties.iter().find(|&&i| self.basis[i] == z0) {
+            return Some(r);
+        }
+        // Lexicographic: the smallest B⁻¹_ij / col_i for j = 0, 1, … among the tied rows.
+        let mut j = 0;
+        while self.ties.len() > 1 && j < n {
+            let ratio = |i: usize| self.binv[i * n + j] / piv(self.col[i]);
+            let min = self
+                .ties
+                .iter()
+                .map(|&i| ratio(i))
+                .fold(Real::INFINITY, Real::min);
+            self.ties.retain(|&i| tie(ratio(i), min));
+            j += 1;
+        }
+        self.ties.first().copied()
+    }
+
+    /// One pivot: variable `e` (whose column is `col`) enters at row `r`; returns the
+    /// variable that left. Gauss–Jordan on `[x_B | B⁻¹]`: row `r` divided by `col_r`, then
+    /// `col_i` times it subtracted from every other row.
+    fn pivot(&mut self, r: usize, e: usize) -> usize {
+        let n = self.n;
+        let p = self.col[r];
+        let (before, rest) = self.binv[..n * n].split_at_mut(r * n);
+        let (prow, after) = rest.split_at_mut(n);
+        for v in prow.iter_mut() {
+            *v /= p;
+        }
+        self.xb[r] /= p;
+        let xr = self.xb[r];
+        for (i, row) in before
+            .chunks_exact_mut(n)
+            .chain(after.chunks_exact_mut(n))
+            .enumerate()
+        {
+            let i = if i < r { i } else { i + 1 };
+            let f = self.col[i];
+            if f != 0.0 {
+                for (v, pv) in row.iter_mut().zip(prow.iter()) {
+                    *v -= f * pv;
+                }
+                self.xb[i] -= f * xr;
+            }
+        }
+        std::mem::replace(&mut self.basis[r], e)
+    }
+
+    /// One step of iterative refinement of the final basis (`z₀` is not in it):
+    /// `x_B += B⁻¹ (q̂ − Σ_b a_b x_b)`, with the basis' columns `a_b` taken from `M`.
+    fn refine<R: Dim, C: Dim, S: RawStorage<Real, R, C>, QS: RawStorage<Real, R, U1>>(
+        &mut self,
+        m: &Matrix<Real, R, C, S>,
+        q: &Matrix<Real, R, U1, QS>,
+        sm: Real,
+        sq: Real,
+    ) {
+        let n = self.n;
+        for k in 0..n {
+            self.scratch[k] = q[k] / sq;
+        }
+        for (b, &var) in self.basis[..n].iter().enumerate() {
+            let x = self.xb[b];
+            if var < n {
+                self.scratch[var] -= x;
+            } else {
+                let j = var - n;
+                for k in 0..n {
+                    self.scratch[k] += m[(k, j)] / sm * x;
+                }
+            }
+        }
+        for i in 0..n {
+            let row = &self.binv[i * n..(i + 1) * n];
+            self.xb[i] += row
+                .iter()
+                .zip(&self.scratch[..n])
+                .map(|(a, b)| a * b)
+                .sum::<Real>();
+        }
+    }
+
+    /// `z` from the basis (unscaled, negatives of rounding set to 0), and `w = M z + q`.
+    fn extract<R: Dim, C: Dim, S: RawStorage<Real, R, C>, QS: RawStorage<Real, R, U1>>(
+        &mut self,
+        m: &Matrix<Real, R, C, S>,
+        q: &Matrix<Real, R, U1, QS>,
+        sm: Real,
+        sq: Real,
+    ) {
+        let n = self.n;
+        self.z[..n].fill(0.0);
+        for (b, &var) in self.basis[..n].iter().enumerate() {
+            if (n..2 * n).contains(&var) {
+                self.z[var - n] = (self.xb[b] * sq / sm).max(0.0);
+            }
+        }
+        for i in 0..n {
+            self.w[i] = q[i] + (0..n).map(|j| m[(i, j)] * self.z[j]).sum::<Real>();
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! The complementarity problem of several contacts with Coulomb friction. Pure numerics on
+//! `(A, b, μ)`: nothing here knows about bodies.
+//!
+//! For `n` contacts, with unknown forces (or impulses) `x = (x_n0, x_t0, x_n1, x_t1, …)` and
+//! `w = A x + b` the resulting normal and tangential accelerations (or velocities), each
+//! contact is in one of the modes
+//!
+//! | mode | equations | conditions |
+//! |---|---|---|
+//! | open | `x_n = 0`, `x_t = 0` | `w_n ≥ 0` |
+//! | stick | `w_n = 0`, `w_t = 0` | `x_n ≥ 0`, `|x_t| ≤ μ x_n` |
+//! | slide `s` | `w_n = 0`, `x_t = −μ s x_n` | `x_n ≥ 0`, and `s w_t ≥ 0` when the slip starts |
+//!
+//! This is Coulomb's law with unilateral contact at the acceleration level (persistent
+//! contacts: `w` is the relative acceleration, the slip direction `s` of a sliding contact
+//! is known from its velocity) or at the velocity level (Moreau's generalized Newton law
+//! for simultaneous impacts: `w = v⁺ + e v⁻`, the slip is that of `v⁺`).
+//!
+//! Two solvers:
+//!
+//! - [`solve`] enumerates the `≤ 4ⁿ` mode combinations (`enumerate.rs`) and finds every
+//!   solution: none or several reveal Painlevé's paradox (inconsistency or indeterminacy).
+//!   Exact, for a few contacts ([`MAX_ENUMERATED`]). [`forces`] solves one known
+//!   combination.
+//! - [`Solver`] finds one solution by Lemke's complementary pivoting (`lemke.rs`) on the
+//!   problem written as a standard LCP with the friction cone split into its two edges
+//!   (`friction.rs`): polynomial in practice, for many contacts; its ray termination is
+//!   [`LcpError::NoSolution`].
+
+mod enumerate;
+mod friction;
+pub mod lemke;
+
+pub use enumerate::{forces, solve};
+pub use friction::{CHECK_TOL, LcpError, Solver, conditions_violation};
+
+use nalgebra::DVector;
+
+use crate::math::Real;
+
+/// The mode of one contact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// The contact opens: no force.
+    Open,
+    /// The contact is closed and does not slip.
+    Stick,
+    /// The contact is closed and slips in the direction `s = ±1` along its tangent; the
+    /// friction is `x_t = −μ s x_n`.
+    Slide(Real),
+}
+
+/// Which modes a contact may take.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Allowed {
+    /// Coulomb's coefficient `μ ≥ 0`.
+    pub mu: Real,
+    /// The contact may open.
+    pub open: bool,
+    /// The known slip direction (`Some(±1)`: the contact slides, it cannot stick); `None`:
+    /// it may stick, or start to slip either way (then `s w_t ≥ 0` is required).
+    pub slip: Option<Real>,
+}
+
+/// A solution: the mode, force and resulting `w` of every contact.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    /// Mode of each contact.
+    pub modes: Vec<Mode>,
+    /// Forces `x` (2n): normal and tangential of each contact.
+    pub x: DVector<Real>,
+    /// `w = A x + b` (2n).
+    pub w: DVector<Real>,
+}
+
+/// Every solution of the problem (none, one, or several).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solutions {
+    /// The solutions, in the order the modes were enumerated (for each contact: open,
+    /// stick, slide +1, slide −1).
+    pub all: Vec<Solution>,
+}
+
+/// Relative tolerance of the residuals and sign conditions.
+const TOL: Real = 1e-9;
+
+/// The most contacts the event-driven loop hands to [`solve`]: `4⁶ = 4096` linear systems
+/// of size 12, some tens of milliseconds. Beyond it the enumeration's `4ⁿ` cost would stall
+/// a run (at 11 points, four million systems per call) where it cannot even be
+/// interrupted; the loop stops with a clear error instead (Moreau–Jean's Gauss–Seidel
+/// handles many contacts).
+pub const MAX_ENUMERATED: usize = 6;
