@@ -84,9 +84,54 @@ pub struct Solutions {
 /// Relative tolerance of the residuals and sign conditions.
 const TOL: Real = 1e-9;
 
-/// The most contacts the event-driven loop hands to [`solve`]: `4⁶ = 4096` linear systems
-/// of size 12, some tens of milliseconds. Beyond it the enumeration's `4ⁿ` cost would stall
-/// a run (at 11 points, four million systems per call) where it cannot even be
-/// interrupted; the loop stops with a clear error instead (Moreau–Jean's Gauss–Seidel
-/// handles many contacts).
+/// The most contacts of one problem that [`solutions`] enumerates: `4⁴ = 256` linear
+/// systems of size 8, about 3 ms (benches/lcp.rs: 2.9 ms for 4 contacts, 14.5 ms for 5,
+/// 73 ms for 6; Lemke 11 µs for 4). Beyond it only Lemke's algorithm runs.
+pub const ENUMERATED_UP_TO: usize = 4;
+
+/// The most contacts the enumeration [`solve`] is meant for: `4⁶ = 4096` linear systems of
+/// size 12, some tens of milliseconds (its `4ⁿ` cost would stall a run beyond: four
+/// million systems at 11 points). The simulation enumerates up to [`ENUMERATED_UP_TO`]
+/// only; Moreau–Jean's exact check up to this.
 pub const MAX_ENUMERATED: usize = 6;
+
+/// The solutions of the contact problem as the simulation takes them: several where it
+/// can see them, one otherwise.
+///
+/// - Up to [`ENUMERATED_UP_TO`] contacts, the enumeration ([`solve`]): every solution,
+///   exactly, so that several (Painlevé's indeterminacy, redundant points) are seen and the
+///   documented rule chooses among them.
+/// - Where the enumeration finds none, or beyond that size: Lemke's algorithm
+///   ([`Solver::solve`]), one solution. It also finds what the enumeration misses: the
+///   statically indeterminate split of redundant sticking points (a block on two corners
+///   on a slope sticks for every μ ≥ tan θ; the enumeration's least-squares split needs an
+///   equal share of the friction, μ ≥ 0.812 at 30°).
+///
+/// `Err(LcpError::NoSolution)` is Lemke's ray termination (Painlevé's inconsistency; see
+/// its `known_slip`); the other errors are failures of the solver.
+pub fn solutions(
+    solver: &mut Solver,
+    a: &nalgebra::DMatrix<Real>,
+    b: &DVector<Real>,
+    allowed: &[Allowed],
+) -> Result<Vec<Solution>, LcpError> {
+    if allowed.len() <= ENUMERATED_UP_TO {
+        let all = solve(a, b, allowed).all;
+        if !all.is_empty() {
+            return Ok(all);
+        }
+    }
+    match solver.solve(a, b, allowed) {
+        Ok(s) => Ok(vec![s]),
+        // Lemke's path can end on a ray where a solution exists (a known slip; massive
+        // degeneracy: redundant points at rest, b_n = 0): a few points more are checked by
+        // the enumeration before the problem is declared without solution.
+        Err(e @ LcpError::NoSolution { .. })
+            if (ENUMERATED_UP_TO + 1..=MAX_ENUMERATED).contains(&allowed.len()) =>
+        {
+            let all = solve(a, b, allowed).all;
+            if all.is_empty() { Err(e) } else { Ok(all) }
+        }
+        Err(e) => Err(e),
+    }
+}

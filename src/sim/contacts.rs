@@ -717,10 +717,51 @@ impl Simulation<'_> {
         (c.hold == Hold::Stick).then(|| (pair, c.local, -persistent.force(i).1.signum()))
     }
 
-    /// Selects the modes of the resting points. The point of `starts_to_slip` (a sticking
-    /// point at the edge of its friction cone) may open or slide, not stick: at the event
-    /// both are consistent to rounding, and sticking would cross the edge again at once.
+    /// Selects the modes of the resting points, group by group of coupled points (each a
+    /// separate problem, see `coupling`); the closed points in the order of `resting`.
     fn select_modes(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        resting: &[Touch],
+        starts_to_slip: Option<(PairId, Vec2, Real)>,
+        observer: &mut dyn Observer,
+    ) -> Result<Selected, SimError> {
+        let group = (self.coupling).groups(self.model, resting.iter().map(|p| p.pair));
+        let mut ids: Vec<usize> = Vec::new();
+        for g in &group {
+            if !ids.contains(g) {
+                ids.push(*g);
+            }
+        }
+        if ids.len() <= 1 {
+            return self.select_group(t, y, resting, starts_to_slip, observer);
+        }
+        let mut closed: Vec<(usize, Closed)> = Vec::new();
+        for id in ids {
+            let index: Vec<usize> = (0..resting.len()).filter(|&i| group[i] == id).collect();
+            let members: Vec<Touch> = index.iter().map(|&i| resting[i]).collect();
+            match self.select_group(t, y, &members, starts_to_slip, observer)? {
+                Selected::Set(set) => {
+                    for c in set {
+                        let at = (index.iter().copied())
+                            .find(|&i| resting[i].pair == c.pair && resting[i].local == c.local)
+                            .unwrap_or(usize::MAX);
+                        closed.push((at, c));
+                    }
+                }
+                painleve => return Ok(painleve),
+            }
+        }
+        closed.sort_by_key(|c| c.0);
+        Ok(Selected::Set(closed.into_iter().map(|c| c.1).collect()))
+    }
+
+    /// Selects the modes of the resting points of one group. The point of `starts_to_slip`
+    /// (a sticking point at the edge of its friction cone) may open or slide, not stick: at
+    /// the event both are consistent to rounding, and sticking would cross the edge again
+    /// at once.
+    fn select_group(
         &mut self,
         t: Real,
         y: &[Real],

@@ -197,6 +197,8 @@ pub struct ImpactMap {
     x_n: Vec<Real>,
     /// `M⁻¹ J_tᵀ` (nu).
     x_t: Vec<Real>,
+    /// The complementarity solver of simultaneous impacts.
+    lcp: lcp::Solver,
 }
 
 impl ImpactMap {
@@ -211,6 +213,7 @@ impl ImpactMap {
             j_t: vec![0.0; nu],
             x_n: vec![0.0; nu],
             x_t: vec![0.0; nu],
+            lcp: lcp::Solver::new(),
         }
     }
 
@@ -451,8 +454,8 @@ impl ImpactMap {
     /// v⁺ = v⁻ + W P,   v_n⁺ + e v_n⁻ ≥ 0 ⊥ P_n ≥ 0,   |P_t| ≤ μ P_n (stick or slip by v_t⁺)
     /// ```
     ///
-    /// with `W = J M⁻¹ Jᵀ` over all the points (2k × 2k), solved exactly by enumeration
-    /// ([`crate::lcp::solve`]); then `Δu = M⁻¹ Jᵀ P`. Each entry reports the point's own
+    /// with `W = J M⁻¹ Jᵀ` over all the points (2k × 2k), solved by [`crate::lcp::solutions`]
+    /// (the enumeration for a few points, its first solution; Lemke's algorithm beyond); then `Δu = M⁻¹ Jᵀ P`. Each entry reports the point's own
     /// 2×2 block of `W`, its velocities and impulses, the type of its final slip, Eq. (29)
     /// and the works along the straight path (`Phases::straight`); the law is reported as
     /// Newton's. The energies before and after each entry add up the points' Eq. (29) in
@@ -466,17 +469,6 @@ impl ImpactMap {
         u: &mut [Real],
     ) -> Result<Vec<ImpactEvent>, SimError> {
         let k = points.len();
-        if k > lcp::MAX_ENUMERATED {
-            return Err(SimError::Contact {
-                t,
-                message: format!(
-                    "a simultaneous impact of {k} contact points: more than the exact \
-                     enumeration of the generalized Newton law handles ({}); Moreau–Jean \
-                     (--method moreau-jean) handles many contacts",
-                    lcp::MAX_ENUMERATED
-                ),
-            });
-        }
         let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
         // The complementarity problem: w = W P + b with b_n = (1 + e) v_n⁻, b_t = v_t⁻.
         let mut b = DVector::zeros(2 * k);
@@ -490,16 +482,15 @@ impl ImpactMap {
                 slip: None,
             });
         }
-        let solutions = lcp::solve(&set.w, &b, &allowed).all;
-        let Some(sol) = solutions.first() else {
-            return Err(SimError::Contact {
+        let solutions =
+            lcp::solutions(&mut self.lcp, &set.w, &b, &allowed).map_err(|e| SimError::Contact {
                 t,
                 message: format!(
-                    "the simultaneous impact of {k} contact points has no solution under the \
-                     generalized Newton law"
+                    "the simultaneous impact of {k} contact points under the generalized \
+                     Newton law: {e}"
                 ),
-            });
-        };
+            })?;
+        let sol = &solutions[0];
         let materials: Vec<Material> = points.iter().map(|p| p.2).collect();
         self.jump(
             model,

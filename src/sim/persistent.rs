@@ -19,8 +19,9 @@
 //! (the same for `c_t`): it holds the curvature of both surfaces and the turning of `n`
 //! whatever the shapes. With `A = J M⁻¹ Jᵀ` and `b = J M⁻¹ (τ − h) + c`, the forces
 //! solve the equations of the modes ([`crate::lcp::forces`]); the modes themselves come
-//! from the complementarity problem `a = A λ + b` ([`crate::lcp::solve`]), whose lack of
-//! solution or multiple solutions is Painlevé's paradox.
+//! from the complementarity problem `a = A λ + b` ([`crate::lcp::solutions`]: every
+//! solution of a few points by enumeration, Lemke's one beyond), whose lack of solution or
+//! multiple solutions is Painlevé's paradox.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -143,6 +144,8 @@ pub struct Persistent {
     points: Vec<Point>,
     /// Whether the last evaluation found every closed point.
     complete: bool,
+    /// The complementarity solver of the mode selection.
+    lcp: lcp::Solver,
 }
 
 impl Persistent {
@@ -166,6 +169,7 @@ impl Persistent {
             lambda: DVector::zeros(0),
             points: Vec::new(),
             complete: true,
+            lcp: lcp::Solver::new(),
         }
     }
 
@@ -370,17 +374,6 @@ impl Persistent {
         candidates: &[Candidate],
         v_slip: Real,
     ) -> Result<Selection, SimError> {
-        if candidates.len() > lcp::MAX_ENUMERATED {
-            return Err(SimError::Contact {
-                t: state.0,
-                message: format!(
-                    "{} contact points closed at once: more than the exact mode selection \
-                     handles ({}); Moreau–Jean (--method moreau-jean) handles many contacts",
-                    candidates.len(),
-                    lcp::MAX_ENUMERATED
-                ),
-            });
-        }
         // Assemble with provisional modes (the rows do not depend on them).
         let closed: Vec<Closed> = candidates
             .iter()
@@ -401,7 +394,17 @@ impl Persistent {
                     .or_else(|| (p.v_t.abs() > v_slip).then(|| p.v_t.signum())),
             })
             .collect();
-        let solutions = lcp::solve(&self.a, &self.b, &allowed).all;
+        // No solution (Lemke's ray) is Painlevé's inconsistency for the caller to resolve.
+        let solutions = match lcp::solutions(&mut self.lcp, &self.a, &self.b, &allowed) {
+            Ok(all) => all,
+            Err(lcp::LcpError::NoSolution { .. }) => Vec::new(),
+            Err(e) => {
+                return Err(SimError::Contact {
+                    t: state.0,
+                    message: format!("the contact modes of {} points: {e}", candidates.len()),
+                });
+            }
+        };
         let painleve: Vec<Real> = (0..candidates.len())
             .map(|i| match allowed[i].slip {
                 Some(s) => self.a[(2 * i, 2 * i)] - allowed[i].mu * s * self.a[(2 * i, 2 * i + 1)],
