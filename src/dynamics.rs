@@ -31,6 +31,7 @@ use crate::math::Real;
 use crate::model::spatial::{Twist, Wrench};
 use crate::model::{JointId, Model};
 use crate::state::Data;
+use crate::tree_matrix::{TreeMatrix, TreePattern};
 
 /// A failure to evaluate the equations of motion, with the evidence.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -65,82 +66,190 @@ pub enum DynamicsError {
     NotFactored,
 }
 
-/// The Cholesky factorization `M = L Lᵀ` (`L` lower triangular) of the mass matrix,
-/// nalgebra's [`Cholesky`], kept with its buffer so that refactoring allocates nothing: the
-/// factor's matrix is taken back with `unpack_dirty`, overwritten with the new `M` and
-/// factored in place. The impact map solves `M x = b` with it for several right-hand sides
+/// The factorization of the mass matrix, `M = Lᵀ L` [F, §6.5] with `L` lower triangular
+/// and the sparsity of the tree ([`TreeMatrix::factor_ltl_from`]): for free bodies it is
+/// diagonal by blocks, for a branched tree it has no entry beyond the ancestors of each
+/// speed. When the pattern is the full triangle (a single chain of speeds, a nonholonomic
+/// model) nothing is saved by the tree, and nalgebra's dense Cholesky `M = L Lᵀ` is used
+/// instead: the same cost, and the results of the scenes recorded before the sparse
+/// factor bit for bit (the two factorizations round differently; a one-ulp change of
+/// `kane_double_pendulum`'s state then takes another event sequence, beyond its golden
+/// file's margin). Its storage is allocated once, so that refactoring allocates nothing.
+/// The impact map solves `M x = b` with it for several right-hand sides
 /// (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
 #[derive(Clone, Debug)]
 pub struct MassFactor {
-    /// The factor of the last mass matrix, if it was positive definite.
-    chol: Option<Cholesky<Real, Dyn>>,
-    /// The buffer when there is no factor (before the first factorization).
-    spare: Option<DMatrix<Real>>,
-    /// The dimension `nu`.
-    n: usize,
+    storage: FactorStorage,
+    /// `true` if the storage holds the factor of the last mass matrix.
+    valid: bool,
+}
+
+/// The factor of a [`MassFactor`].
+#[derive(Clone, Debug)]
+enum FactorStorage {
+    /// `M = Lᵀ L` with the tree's sparsity.
+    Tree(TreeMatrix),
+    /// `M = L Lᵀ` dense (a full pattern): the factor, or the buffer before the first one.
+    Dense {
+        chol: Option<Cholesky<Real, Dyn>>,
+        spare: Option<DMatrix<Real>>,
+        n: usize,
+    },
 }
 
 impl MassFactor {
-    /// A factor buffer for an `n × n` matrix, not yet valid.
-    pub fn new(n: usize) -> Self {
+    /// A factor of the sparsity `pattern`, not yet valid; its storage is allocated at the
+    /// first factorization when `allocate` is false.
+    pub fn new(pattern: TreePattern, allocate: bool) -> Self {
+        let n = pattern.len();
+        let storage = if pattern.entries() == n * (n + 1) / 2 {
+            FactorStorage::Dense {
+                chol: None,
+                spare: allocate.then(|| DMatrix::zeros(n, n)),
+                n,
+            }
+        } else if allocate {
+            FactorStorage::Tree(TreeMatrix::zeros(pattern))
+        } else {
+            FactorStorage::Tree(TreeMatrix::unallocated(pattern))
+        };
         MassFactor {
-            chol: None,
-            spare: Some(DMatrix::zeros(n, n)),
-            n,
+            storage,
+            valid: false,
         }
     }
 
     /// `true` if it holds the factor of the last mass matrix.
     pub fn is_valid(&self) -> bool {
-        self.chol.is_some()
+        self.valid
     }
 
-    /// The lower triangular factor `L` of `M = L Lᵀ` (a copy), if factored.
-    pub fn lower(&self) -> Option<DMatrix<Real>> {
-        self.chol.as_ref().map(|c| c.l())
-    }
-
-    /// Factors the symmetric matrix `m` (its lower triangle is read) into `M = L Lᵀ`.
-    ///
-    /// Returns the smallest eigenvalue of `m` if it is not positive definite (computed on
-    /// that cold path only; the buffer is then lost and reallocated at the next call).
-    fn factor(&mut self, m: &DMatrix<Real>) -> Result<(), Real> {
-        let mut buf = match (self.chol.take(), self.spare.take()) {
-            (Some(chol), _) => chol.unpack_dirty(),
-            (None, Some(buf)) => buf,
-            (None, None) => DMatrix::zeros(self.n, self.n),
-        };
-        buf.copy_from(m);
-        match Cholesky::new(buf) {
-            Some(chol) => {
-                self.chol = Some(chol);
-                Ok(())
+    /// `M` rebuilt from the factor (dense, for tests: `Lᵀ L` or `L Lᵀ`), if factored.
+    pub fn product(&self) -> Option<DMatrix<Real>> {
+        if !self.valid {
+            return None;
+        }
+        match &self.storage {
+            FactorStorage::Tree(l) => {
+                let l = l.to_dense_lower();
+                Some(l.transpose() * l)
             }
-            None => Err(smallest_eigenvalue(m)),
+            FactorStorage::Dense { chol, .. } => chol.as_ref().map(|c| {
+                let l = c.l();
+                &l * l.transpose()
+            }),
         }
     }
 
-    /// Solves `M x = b` in place (`b` becomes `x`): `L y = b` forward, then `Lᵀ x = y`
-    /// backward.
+    /// The sparse factor `L` of `M = Lᵀ L`, if factored and the pattern is not full.
+    pub fn tree_factor(&self) -> Option<&TreeMatrix> {
+        match &self.storage {
+            FactorStorage::Tree(l) if self.valid => Some(l),
+            _ => None,
+        }
+    }
+
+    /// Factors the symmetric matrix `m`.
+    ///
+    /// Returns the smallest eigenvalue of `m` if it is not positive definite (computed on
+    /// that cold path only, for at most [`EIGENVALUE_EVIDENCE_MAX`] speeds; NaN beyond).
+    fn factor(&mut self, m: &TreeMatrix) -> Result<(), Real> {
+        self.valid = false;
+        let ok = match &mut self.storage {
+            FactorStorage::Tree(l) => l.factor_ltl_from(m).is_ok(),
+            FactorStorage::Dense { chol, spare, n } => {
+                let mut buf = match (chol.take(), spare.take()) {
+                    (Some(c), _) => c.unpack_dirty(),
+                    (None, Some(buf)) => buf,
+                    (None, None) => DMatrix::zeros(*n, *n),
+                };
+                // The lower triangle, which nalgebra's Cholesky reads.
+                for i in 0..*n {
+                    let mut j = i;
+                    for &v in m.row(i) {
+                        buf[(i, j)] = v;
+                        j = j.wrapping_sub(1);
+                    }
+                }
+                *chol = Cholesky::new(buf);
+                chol.is_some()
+            }
+        };
+        if ok {
+            self.valid = true;
+            Ok(())
+        } else {
+            Err(smallest_eigenvalue(m))
+        }
+    }
+
+    /// Solves `M x = b` in place (`b` becomes `x`): `Lᵀ y = b` backward, then `L x = y`
+    /// forward (`L y = b`, `Lᵀ x = y` for the dense factor).
     pub fn solve_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
-        let chol = self.chol.as_ref().ok_or(DynamicsError::NotFactored)?;
-        check_len("right-hand side", self.n, b.len())?;
-        chol.solve_mut(&mut DVectorViewMut::from_slice(b, self.n));
+        if !self.valid {
+            return Err(DynamicsError::NotFactored);
+        }
+        match &self.storage {
+            FactorStorage::Tree(l) => {
+                check_len("right-hand side", l.nrows(), b.len())?;
+                l.solve_ltl(b);
+            }
+            FactorStorage::Dense { chol, n, .. } => {
+                let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
+                check_len("right-hand side", *n, b.len())?;
+                chol.solve_mut(&mut DVectorViewMut::from_slice(b, *n));
+            }
+        }
         Ok(())
     }
 }
 
+/// The largest mass matrix whose smallest eigenvalue a failed factorization reports (a
+/// dense eigen-decomposition, `O(n³)`).
+pub const EIGENVALUE_EVIDENCE_MAX: usize = 1000;
+
 /// The smallest eigenvalue of a symmetric matrix (the evidence of a failed factorization).
 #[cold]
-fn smallest_eigenvalue(m: &DMatrix<Real>) -> Real {
-    if m.iter().any(|x| !x.is_finite()) {
+fn smallest_eigenvalue(m: &TreeMatrix) -> Real {
+    if m.nrows() > EIGENVALUE_EVIDENCE_MAX || m.values().iter().any(|x| !x.is_finite()) {
         return Real::NAN;
     }
-    SymmetricEigen::new(m.clone())
+    SymmetricEigen::new(m.to_dense())
         .eigenvalues
         .iter()
         .copied()
         .fold(Real::INFINITY, Real::min)
+}
+
+/// The sparsity of the mass matrix of `model`: the expanded parent array of its speeds
+/// [F, §6.4] for a holonomic model (a joint's speeds in a row, the first one's parent the
+/// last speed of the nearest ancestor joint that has speeds), dense for a nonholonomic one
+/// (`M = Sᵀ M_v S` couples the speeds the constraints mix).
+pub fn mass_pattern(model: &Model) -> TreePattern {
+    if !model.is_holonomic() {
+        return TreePattern::dense(model.nu());
+    }
+    let joints = model.joints();
+    let mut parent = vec![None; model.nu()];
+    // The last speed of each joint, or of its nearest ancestor that has speeds.
+    let mut last: Vec<Option<usize>> = Vec::with_capacity(joints.len());
+    for (i, joint) in joints.iter().enumerate() {
+        let up = joint
+            .parent
+            .and_then(|p| last.get(p.index()).copied().flatten());
+        match model.q_index(JointId(i)) {
+            Some(s) => {
+                let nd = joint.kind.ndof();
+                for k in 0..nd {
+                    parent[s + k] = if k == 0 { up } else { Some(s + k - 1) };
+                }
+                last.push(Some(s + nd - 1));
+            }
+            None => last.push(up),
+        }
+    }
+    // The builder puts parents before children and numbers the speeds in joint order.
+    TreePattern::new(&parent).unwrap_or_else(|| TreePattern::dense(model.nu()))
 }
 
 /// Kinetic and potential energy.
@@ -183,34 +292,39 @@ pub struct Power {
 /// ```
 ///
 /// `P_cᵀ I^c P_c` is the point mass `I^c.m` at the joint (see
-/// [`crate::model::spatial::Inertia::projected_at`]). Cost: `O(n·depth)`.
+/// [`crate::model::spatial::Inertia::projected_at`]). Cost: `O(n·depth)`. Only the
+/// entries of a speed and its ancestors are non-zero; `data.mass` stores those alone
+/// ([`TreeMatrix`], [`mass_pattern`]).
 ///
-/// Requires [`update_positions`]. Writes `data.composite` and `data.mass`.
+/// Requires [`update_positions`]. Writes `data.composite` and `data.mass` (allocating its
+/// storage if the workspace was built without it, [`Data::for_kinematics`]).
 pub fn mass_matrix(model: &Model, data: &mut Data) {
     if model.is_holonomic() {
         let mut mass = std::mem::take(&mut data.mass);
-        tree_mass_matrix(model, data, &mut mass);
+        mass.clear();
+        tree_mass_matrix(model, data, |r, c, m| mass.set_ancestor(r, c, m));
         data.mass = mass;
     } else {
         // M = Sᵀ M_v S  (Kane's generalized inertia forces in the speeds u).
         let mut mass_tree = std::mem::take(&mut data.mass_tree);
-        tree_mass_matrix(model, data, &mut mass_tree);
+        mass_tree.fill(0.0);
+        tree_mass_matrix(model, data, |r, c, m| {
+            mass_tree[(r, c)] = m;
+            mass_tree[(c, r)] = m;
+        });
         data.mass_map.gemm(1.0, &mass_tree, &data.speed_map, 0.0);
-        data.mass.gemm_tr(1.0, &data.speed_map, &data.mass_map, 0.0);
-        // Exactly symmetric: the upper triangle from the lower one.
-        let nu = data.mass.nrows();
-        for c in 1..nu {
-            for r in 0..c {
-                data.mass[(r, c)] = data.mass[(c, r)];
-            }
-        }
+        data.mass_dense
+            .gemm_tr(1.0, &data.speed_map, &data.mass_map, 0.0);
+        // Exactly symmetric: the lower triangle is stored.
+        data.mass.copy_lower_from(&data.mass_dense);
         data.mass_tree = mass_tree;
     }
 }
 
-/// The composite rigid body algorithm of [`mass_matrix`] over the tree speeds, into `out`
-/// `[nv × nv]`.
-fn tree_mass_matrix(model: &Model, data: &mut Data, out: &mut DMatrix<Real>) {
+/// The composite rigid body algorithm of [`mass_matrix`] over the tree speeds: `set(r, c,
+/// M_rc)` for every speed `r` and `c = r` or an ancestor of `r` in the expanded parent
+/// array ([`mass_pattern`]); the other entries are zero.
+fn tree_mass_matrix(model: &Model, data: &mut Data, mut set: impl FnMut(usize, usize, Real)) {
     let joints = model.joints();
     // Composite inertias, leaves first.
     data.composite.copy_from_slice(&data.body_inertia);
@@ -223,12 +337,8 @@ fn tree_mass_matrix(model: &Model, data: &mut Data, out: &mut DMatrix<Real>) {
             data.composite[p.index()] += ic;
         }
     }
-    // Rows: for each free coordinate, the wrench I^c S walked up to the root. M is
-    // symmetric; both triangles are written (column-major slice, M_rc at c·nu + r).
-    let nu = model.nv();
+    // Rows: for each free coordinate, the wrench I^c S walked up to the root.
     let (subspace, frames, composite) = (&data.subspace, &data.joint_frame, &data.composite);
-    let mass = out.as_mut_slice();
-    mass.fill(0.0);
     for (i, joint) in joints.iter().enumerate() {
         let Some(si) = model.q_index(JointId(i)) else {
             continue;
@@ -236,10 +346,8 @@ fn tree_mass_matrix(model: &Model, data: &mut Data, out: &mut DMatrix<Real>) {
         for k in 0..joint.kind.ndof() {
             let r = si + k;
             let mut f = composite[i].mul_twist(&subspace[i][k]);
-            for k2 in 0..=k {
-                let m = subspace[i][k2].dot(&f);
-                mass[(si + k2) * nu + r] = m;
-                mass[r * nu + si + k2] = m;
+            for (k2, s) in subspace[i][..=k].iter().enumerate() {
+                set(r, si + k2, s.dot(&f));
             }
             let mut b = i;
             while let Some(p) = joints[b].parent {
@@ -248,10 +356,9 @@ fn tree_mass_matrix(model: &Model, data: &mut Data, out: &mut DMatrix<Real>) {
                 }
                 b = p.index();
                 if let Some(sp) = model.q_index(JointId(b)) {
-                    for k2 in 0..joints[b].kind.ndof() {
-                        let m = subspace[b][k2].dot(&f);
-                        mass[(sp + k2) * nu + r] = m;
-                        mass[r * nu + sp + k2] = m;
+                    let nd = joints[b].kind.ndof();
+                    for (k2, s) in subspace[b][..nd].iter().enumerate() {
+                        set(r, sp + k2, s.dot(&f));
                     }
                 }
             }

@@ -77,4 +77,5 @@ pub mod settings;
 pub mod sim;
 pub mod state;
 pub mod sweep;
+pub mod tree_matrix;
 pub mod workprec;

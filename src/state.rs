@@ -4,10 +4,11 @@
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use crate::dynamics::MassFactor;
+use crate::dynamics::{MassFactor, mass_pattern};
 use crate::math::{Pose, Real, Vec2};
 use crate::model::Model;
 use crate::model::spatial::{Inertia, Twist, Wrench};
+use crate::tree_matrix::TreeMatrix;
 
 /// The state of a run: all that is needed to restart it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -99,10 +100,12 @@ pub struct Data {
     /// `dynamics::power`, the effort the drive exerts. Written by `dynamics`.
     pub joint_effort: Vec<[Real; 3]>,
     /// Mass matrix `M(q)` `[nu × nu]` (kg, kg·m, kg·m²), symmetric positive definite
-    /// (`M = −M_paper`, [P, Eq. (68)]). Written by `dynamics::mass_matrix`.
-    pub mass: DMatrix<Real>,
-    /// Cholesky factor of `M`, `M = L Lᵀ`. Written by `dynamics::forward_dynamics`;
-    /// use it with [`crate::dynamics::solve_mass`].
+    /// (`M = −M_paper`, [P, Eq. (68)]), stored with the tree's sparsity (the entries of a
+    /// speed and its ancestors, [`crate::dynamics::mass_pattern`]). Written by
+    /// `dynamics::mass_matrix`.
+    pub mass: TreeMatrix,
+    /// The factor of `M = Lᵀ L` [F, §6.5], with the same sparsity. Written by
+    /// `dynamics::forward_dynamics`; use it with [`crate::dynamics::solve_mass`].
     pub mass_factor: MassFactor,
     /// Bias forces `h(t, q, u)` `[nu]` (N, N·m): velocity products, gravity, force elements
     /// and the coupling to the prescribed accelerations, so that `M u̇ = τ − h`. Written by
@@ -142,6 +145,8 @@ pub struct Data {
     pub mass_tree: DMatrix<Real>,
     /// `M_v S` `[nv × nu]`, scratch of `mass_matrix`.
     pub mass_map: DMatrix<Real>,
+    /// `M = Sᵀ M_v S` `[nu × nu]` dense, scratch of `mass_matrix` (nonholonomic models).
+    pub mass_dense: DMatrix<Real>,
     /// The tree's bias or inverse-dynamics forces `[nv]`, scratch.
     pub force_tree: DVector<Real>,
     /// Scratch `[m]`.
@@ -149,8 +154,20 @@ pub struct Data {
 }
 
 impl Data {
-    /// Scratch space for `model`, every entry zero.
+    /// Scratch space for `model`, every entry zero: the kinematics and the dynamics
+    /// allocate nothing afterwards.
     pub fn new(model: &Model) -> Self {
+        Self::with_mass(model, true)
+    }
+
+    /// Scratch space for `model` without the storage of the mass matrix and its factor
+    /// (`O(n²)` for a chain of `n` links), for the kinematics and the energies alone; the
+    /// first [`crate::dynamics::mass_matrix`] or factorization allocates it.
+    pub fn for_kinematics(model: &Model) -> Self {
+        Self::with_mass(model, false)
+    }
+
+    fn with_mass(model: &Model, allocate: bool) -> Self {
         let nb = model.nbody();
         let nu = model.nu();
         let nv = model.nv();
@@ -161,6 +178,7 @@ impl Data {
         } else {
             (nv, nu)
         };
+        let pattern = mass_pattern(model);
         Data {
             time: 0.0,
             joint_q: vec![[0.0; 3]; nb],
@@ -178,8 +196,12 @@ impl Data {
             body_wrench: vec![Wrench::ZERO; nb],
             composite: vec![Inertia::ZERO; nb],
             joint_effort: vec![[0.0; 3]; nb],
-            mass: DMatrix::zeros(nu, nu),
-            mass_factor: MassFactor::new(nu),
+            mass: if allocate {
+                TreeMatrix::zeros(pattern.clone())
+            } else {
+                TreeMatrix::unallocated(pattern.clone())
+            },
+            mass_factor: MassFactor::new(pattern, allocate),
             bias: DVector::zeros(nu),
             udot: DVector::zeros(nu),
             tau: DVector::zeros(nu),
@@ -193,6 +215,7 @@ impl Data {
             tree_accel: DVector::zeros(nh),
             mass_tree: DMatrix::zeros(nh, nh),
             mass_map: DMatrix::zeros(nh, nh_u),
+            mass_dense: DMatrix::zeros(nh_u, nh_u),
             force_tree: DVector::zeros(nh),
             constraint_scratch: DVector::zeros(m),
         }

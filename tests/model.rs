@@ -139,7 +139,7 @@ fn default_pairs_skip_parent_and_child_and_rules_override_them() {
     b.pair(ca, cc, None)
         .pair(cd, floor, Some(rough))
         .disable_pair(floor, ca);
-    let model = b.build().unwrap();
+    let model = b.clone().build().unwrap();
     assert_eq!(
         names(&model),
         [
@@ -152,6 +152,30 @@ fn default_pairs_skip_parent_and_child_and_rules_override_them() {
         .find(|p| p.a == cd && p.b == floor)
         .unwrap();
     assert_eq!(d_floor.material, rough);
+    // pair_between finds each pair from its colliders, in either order, and no other.
+    for (k, p) in model.pairs().iter().enumerate() {
+        assert_eq!(model.pair_between(p.a, p.b).map(|id| id.index()), Some(k));
+        assert_eq!(model.pair_between(p.b, p.a).map(|id| id.index()), Some(k));
+    }
+    assert_eq!(model.pair_between(cc, cd), None, "parent and child");
+    assert_eq!(model.pair_between(floor, ca), None, "disabled");
+
+    // Several rules on one pair: the last one wins, whatever the other pairs' rules.
+    let mut b2 = b.clone();
+    b2.disable_pair(cd, floor)
+        .pair(ca, cd, Some(rough))
+        .pair(floor, cd, None)
+        .disable_pair(ca, cd)
+        .pair(cd, ca, None);
+    let model = b2.build().unwrap();
+    let material = |x, y| {
+        model
+            .pair(model.pair_between(x, y).unwrap())
+            .unwrap()
+            .material
+    };
+    assert_eq!(material(cd, floor), base);
+    assert_eq!(material(ca, cd), base);
 }
 
 fn expect_error(b: ModelBuilder, expected: ModelError) {

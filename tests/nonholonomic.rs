@@ -235,7 +235,8 @@ fn full_coordinates_impact(
         }
     }
     let mut kkt = DMatrix::zeros(nq + m_c, nq + m_c);
-    kkt.view_mut((0, 0), (nq, nq)).copy_from(&data.mass);
+    kkt.view_mut((0, 0), (nq, nq))
+        .copy_from(&data.mass.to_dense());
     kkt.view_mut((0, nq), (nq, m_c))
         .copy_from(&crows.transpose());
     kkt.view_mut((nq, 0), (m_c, nq)).copy_from(&crows);

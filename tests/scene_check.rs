@@ -74,3 +74,62 @@ fn check_fails_with_the_location_of_the_error() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A chain of `links` links (scenes/chain.toml) written to a temporary file.
+fn chain_file(links: usize) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/chain.toml"))
+        .unwrap()
+        .replace("links = 8", &format!("links = {links}"));
+    let path = std::env::temp_dir().join(format!(
+        "ricochet_check_chain_{}_{links}.toml",
+        std::process::id()
+    ));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn check_of_a_big_chain_omits_the_mass_matrix_and_lists_the_overlapping_pairs() {
+    // 120 links: 120 speeds (> 100) and 120·119/2 − 119 link pairs + 120 with the floor.
+    let path = chain_file(120);
+    let out = check(path.to_str().unwrap());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let total = 120 * 119 / 2 - 119 + 120;
+    assert!(v.get("mass_matrix").is_none());
+    assert_eq!(v["pairs_total"], total);
+    assert_eq!(v["omitted"].as_array().unwrap().len(), 2);
+    let listed = v["pairs"].as_array().unwrap();
+    // The straight chain's capsules overlap only their neighbours' boxes (hinged, no
+    // pair): the listed pairs are the 120 links with the floor, 1.5 − 0.02 m below.
+    assert_eq!(listed.len(), 120);
+    for p in listed {
+        assert_eq!(p["b"], "floor");
+        assert!((p["gap"].as_f64().unwrap() - 1.48).abs() < 1e-12, "{p}");
+    }
+
+    // --full: the whole matrix and every pair; each pair left out above is apart.
+    let out = Command::new(env!("CARGO_BIN_EXE_ricochet"))
+        .args(["check", "--full", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let full: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let m = full["mass_matrix"].as_array().unwrap();
+    assert_eq!((m.len(), m[0].as_array().unwrap().len()), (120, 120));
+    assert!(full.get("pairs_total").is_none() && full.get("omitted").is_none());
+    let all = full["pairs"].as_array().unwrap();
+    assert_eq!(all.len(), total);
+    for p in all {
+        if p["b"] == "floor" {
+            assert!(listed.contains(p));
+        } else {
+            assert!(p["gap"].as_f64().unwrap() > 0.2, "{p}");
+        }
+    }
+    std::fs::remove_file(path).unwrap();
+}

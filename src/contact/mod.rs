@@ -8,6 +8,7 @@
 //! frame ([`ContactFrame::n`]) points the other way, from `b` towards `a`, so that the
 //! impulse it reports acts on `a` (always a body).
 
+pub mod broad;
 mod frame;
 mod gap;
 mod manifold;

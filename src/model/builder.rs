@@ -175,33 +175,47 @@ impl ModelBuilder {
         })
     }
 
-    /// The default pairs, then the rules in order (the last rule on a pair wins).
+    /// The default pairs, then the rules in order (the last rule on a pair wins). The
+    /// rules are sorted by pair and walked alongside the pairs, which are listed in the
+    /// order of their smaller, then their larger collider index (no `n × n` table: a
+    /// 4,000-link chain has 8 million pairs).
     fn contact_pairs(&self) -> Result<Vec<ContactPair>, ModelError> {
         let n = self.colliders.len();
-        // material[i][j] for i < j: None = no pair.
-        let mut table: Vec<Option<Material>> = vec![None; n * n];
-        let key = |i: usize, j: usize| i.min(j) * n + i.max(j);
-        for i in 0..n {
-            for j in i + 1..n {
-                if self.default_touch(i, j) {
-                    table[key(i, j)] = Some(self.default_material);
-                }
-            }
-        }
+        // (smaller, larger) → the last rule's material (None: disabled), in pair order.
+        let mut rules: Vec<((usize, usize), Option<Material>)> =
+            Vec::with_capacity(self.rules.len());
         for rule in &self.rules {
             let (a, b) = match *rule {
                 PairRule::Enable(a, b, _) | PairRule::Disable(a, b) => (a.0, b.0),
             };
             self.check_pair(a, b)?;
-            table[key(a, b)] = match *rule {
+            let material = match *rule {
                 PairRule::Enable(_, _, m) => Some(m.unwrap_or(self.default_material)),
                 PairRule::Disable(..) => None,
             };
+            rules.push(((a.min(b), a.max(b)), material));
         }
+        // A stable sort keeps the rules of one pair in their order; keep the last.
+        rules.sort_by_key(|r| r.0);
+        let mut last: Vec<((usize, usize), Option<Material>)> = Vec::with_capacity(rules.len());
+        for r in rules {
+            match last.last_mut() {
+                Some(l) if l.0 == r.0 => *l = r,
+                _ => last.push(r),
+            }
+        }
+        let mut next_rule = last.iter().peekable();
         let mut pairs = Vec::new();
         for i in 0..n {
             for j in i + 1..n {
-                if let Some(material) = table[key(i, j)] {
+                let material = match next_rule.peek() {
+                    Some(&&(key, m)) if key == (i, j) => {
+                        next_rule.next();
+                        m
+                    }
+                    _ => self.default_touch(i, j).then_some(self.default_material),
+                };
+                if let Some(material) = material {
                     // `a` on a body; `b` on a body or the world.
                     let (a, b) = if self.colliders[i].body.is_some() {
                         (i, j)

@@ -274,6 +274,17 @@ impl Model {
         self.pairs.get(id.0)
     }
 
+    /// The pair of the colliders `x` and `y` (in either order), if they may touch: a binary
+    /// search of the pairs, which the builder lists in the order of their smaller, then
+    /// their larger collider index.
+    pub fn pair_between(&self, x: ColliderId, y: ColliderId) -> Option<PairId> {
+        let key = (x.0.min(y.0), x.0.max(y.0));
+        self.pairs
+            .binary_search_by_key(&key, |p| (p.a.0.min(p.b.0), p.a.0.max(p.b.0)))
+            .ok()
+            .map(PairId)
+    }
+
     /// Index in `q` of the first coordinate of joint `id`; `None` for a prescribed or fixed
     /// joint (or an unknown id).
     #[inline]

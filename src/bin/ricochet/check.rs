@@ -3,16 +3,25 @@
 //! the energies (see `DESIGN.md`), with the contact pairs and their initial gaps and the
 //! run settings; for a nonholonomic scene, its constraints and the kinematic equations
 //! `q̇ = A u + b` at the initial state.
+//!
+//! Big models: the mass matrix is printed (and computed) for at most
+//! [`MASS_MATRIX_MAX_SPEEDS`] speeds, and every pair with its gap for at most
+//! [`PAIRS_MAX`] pairs; beyond, `mass_matrix` is absent (`omitted` says why) and `pairs`
+//! lists the pairs whose bounding boxes overlap at the initial state (the broad phase),
+//! with `pairs_total`. `--full` prints everything (a 4,000-link chain: 16 million numbers
+//! and 8 million pairs).
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
+use ricochet::contact::broad::{collider_boxes, overlapping_pairs};
 use ricochet::contact::signed_gap;
 use ricochet::dynamics::Energy;
 use ricochet::dynamics::{energy, factor_mass_matrix, kinematic_equations, mass_matrix};
 use ricochet::math::Real;
+use ricochet::model::{Model, PairId};
 use ricochet::scene;
 use ricochet::settings::Settings;
 use ricochet::state::Data;
@@ -23,7 +32,15 @@ use serde::Serialize;
 pub struct Args {
     /// The scene file (TOML).
     scene: PathBuf,
+    /// Print the mass matrix and every pair whatever the size of the model.
+    #[arg(long)]
+    full: bool,
 }
+
+/// The most speeds whose mass matrix `check` prints without `--full`.
+pub const MASS_MATRIX_MAX_SPEEDS: usize = 100;
+/// The most pairs `check` lists without `--full`.
+pub const PAIRS_MAX: usize = 1000;
 
 /// What `check` prints, in this order.
 #[derive(Serialize)]
@@ -44,10 +61,17 @@ struct Report<'a> {
     constraints: Option<Vec<ConstraintReport<'a>>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     kinematic_equations: Option<KinematicReport>,
-    mass_matrix: Vec<Vec<Real>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mass_matrix: Option<Vec<Vec<Real>>>,
     energy: EnergyReport,
     bodies: Vec<&'a str>,
     pairs: Vec<PairReport<'a>>,
+    /// The number of pairs, when `pairs` lists only some of them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pairs_total: Option<usize>,
+    /// What a big model's report leaves out, and why.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    omitted: Vec<String>,
     settings: &'a Settings,
 }
 
@@ -106,31 +130,43 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let model = &scene.model;
     let state = &scene.initial;
     let (q, u) = (state.q.as_slice(), state.u.as_slice());
-    let mut data = Data::new(model);
+    // The mass matrix's storage only if it is printed.
+    let mut data = Data::for_kinematics(model);
 
     let e = energy(model, &mut data, state.t, q, u)
         .with_context(|| format!("{}: energies at the initial state", args.scene.display()))?;
-    mass_matrix(model, &mut data);
-    factor_mass_matrix(&mut data, state.t)
-        .with_context(|| format!("{}: mass matrix at the initial state", args.scene.display()))?;
-    let mass: Vec<Vec<Real>> = (0..model.nu())
-        .map(|r| (0..model.nu()).map(|c| data.mass[(r, c)]).collect())
-        .collect();
+    let mut omitted = Vec::new();
+    let nu = model.nu();
+    let mass = if args.full || nu <= MASS_MATRIX_MAX_SPEEDS {
+        mass_matrix(model, &mut data);
+        factor_mass_matrix(&mut data, state.t).with_context(|| {
+            format!("{}: mass matrix at the initial state", args.scene.display())
+        })?;
+        Some(
+            (0..nu)
+                .map(|r| (0..nu).map(|c| data.mass[(r, c)]).collect())
+                .collect(),
+        )
+    } else {
+        omitted.push(format!(
+            "mass_matrix: {nu} speeds, more than {MASS_MATRIX_MAX_SPEEDS} (--full prints it)"
+        ));
+        None
+    };
 
-    let mut pairs = Vec::new();
-    for id in model.pair_ids() {
-        let Some(p) = model.pair(id) else { continue };
-        let gap = signed_gap(model, &data, id, Real::INFINITY)
-            .with_context(|| format!("{}: contact pair #{}", args.scene.display(), id.index()))?;
-        pairs.push(PairReport {
-            a: &model.colliders()[p.a.index()].name,
-            b: &model.colliders()[p.b.index()].name,
-            law: p.material.law.name(),
-            e: p.material.e,
-            mu: p.material.mu,
-            gap,
-        });
-    }
+    let npairs = model.pairs().len();
+    let listed: Vec<PairId> = if args.full || npairs <= PAIRS_MAX {
+        model.pair_ids().collect()
+    } else {
+        let boxes = collider_boxes(model, &data, |_| 0.0)
+            .with_context(|| format!("{}: bounding boxes", args.scene.display()))?;
+        omitted.push(format!(
+            "pairs: {npairs} pairs, more than {PAIRS_MAX}: only those whose bounding boxes \
+             overlap at the initial state (--full lists them all)"
+        ));
+        overlapping_pairs(model, &boxes)
+    };
+    let pairs = pair_reports(model, &data, &listed, &args.scene.display().to_string())?;
 
     let (constraints, kinematics) = if model.is_holonomic() {
         (None, None)
@@ -185,7 +221,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         mass_matrix: mass,
         energy: e.into(),
         bodies: model.bodies().iter().map(|b| b.name.as_str()).collect(),
+        pairs_total: (pairs.len() != npairs).then_some(npairs),
         pairs,
+        omitted,
         settings: &scene.settings,
     };
     let text = serde_json::to_string_pretty(&out)?;
@@ -194,4 +232,28 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
         _ => Ok(ExitCode::SUCCESS),
     }
+}
+
+/// The pairs `ids` with their material and their gap at the positions of `data`.
+fn pair_reports<'a>(
+    model: &'a Model,
+    data: &Data,
+    ids: &[PairId],
+    file: &str,
+) -> anyhow::Result<Vec<PairReport<'a>>> {
+    let mut pairs = Vec::with_capacity(ids.len());
+    for &id in ids {
+        let Some(p) = model.pair(id) else { continue };
+        let gap = signed_gap(model, data, id, Real::INFINITY)
+            .with_context(|| format!("{file}: contact pair #{}", id.index()))?;
+        pairs.push(PairReport {
+            a: &model.colliders()[p.a.index()].name,
+            b: &model.colliders()[p.b.index()].name,
+            law: p.material.law.name(),
+            e: p.material.e,
+            mu: p.material.mu,
+            gap,
+        });
+    }
+    Ok(pairs)
 }
