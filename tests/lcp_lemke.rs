@@ -463,3 +463,82 @@ fn bad_input_gets_typed_errors() {
         .unwrap();
     assert!(s0.modes.is_empty());
 }
+
+/// A problem dumped by the simulation (`DUMP A=[…]` column-major, `DUMP b=[…]`,
+/// `DUMP mu=[…]`), every slip unknown, as the simultaneous impact poses it.
+fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
+    let list = |key: &str| -> Vec<f64> {
+        let line = text
+            .lines()
+            .find_map(|l| l.strip_prefix(key))
+            .unwrap_or_else(|| panic!("no {key}"));
+        let inner = line.trim().trim_start_matches('[').trim_end_matches(']');
+        inner
+            .split(',')
+            .map(|v| v.trim().parse().expect("a number"))
+            .collect()
+    };
+    let (a, b, mu) = (list("DUMP A="), list("DUMP b="), list("DUMP mu="));
+    let n = mu.len();
+    assert_eq!((a.len(), b.len()), (4 * n * n, 2 * n));
+    let allowed = mu
+        .iter()
+        .map(|&mu| Allowed {
+            mu,
+            open: true,
+            slip: None,
+        })
+        .collect();
+    (
+        DMatrix::from_column_slice(2 * n, 2 * n, &a),
+        DVector::from_vec(b),
+        allowed,
+    )
+}
+
+/// The 32-link chain falling on the floor (issue 15) stopped at t = 0.734 s on these
+/// simultaneous impacts: 6 and 8 contact points, `A = W` positive semidefinite and rank
+/// deficient (two capsule ends at one hinge: equal normal rows), `b_n ~ 1e-14` for the
+/// points at rest, every slip unknown. Lemke's path ended on a ray after 25 pivots, which
+/// Anitescu and Potra's theorem excludes (module `lcp::friction`): now solved, and the
+/// solution satisfies the table's conditions to rounding.
+#[test]
+fn the_chain_of_32_links_on_the_floor_is_solved() {
+    for (name, text) in [
+        (
+            "6 contacts",
+            include_str!("data/lcp/chain32_6_contacts.txt"),
+        ),
+        (
+            "8 contacts",
+            include_str!("data/lcp/chain32_8_contacts.txt"),
+        ),
+    ] {
+        let (a, b, allowed) = dumped(text);
+        let mut solver = Solver::new();
+        let sol = solver
+            .solve(&a, &b, &allowed)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let v = lcp::conditions_violation(&a, &b, &allowed, &sol);
+        println!(
+            "chain of 32 links, {name}: {} pivots, violation {v:.1e}, modes {:?}",
+            solver.pivots(),
+            sol.modes
+        );
+        assert!(v <= 1e-12, "{name}: {v:e}");
+        // A second method: Lemke's w is one of the enumeration's (9 solutions on the
+        // 6 contacts; 4⁸ systems are too many for the 8).
+        if allowed.len() <= lcp::MAX_ENUMERATED {
+            let all = lcp::solve(&a, &b, &allowed).all;
+            let scale = b.amax() + a.amax() * sol.x.amax();
+            let d = (all.iter())
+                .map(|s| (&s.w - &sol.w).amax() / scale)
+                .fold(f64::INFINITY, f64::min);
+            println!(
+                "{name}: {} solutions enumerated, Lemke's w within {d:.1e}",
+                all.len()
+            );
+            assert!(d <= W_TOL, "{name}: {d:e} from the enumeration's {all:?}");
+        }
+    }
+}
