@@ -188,8 +188,10 @@ fn lemke_agrees_with_the_enumeration_on_random_problems() {
         assert!(tally.both_solved + tally.both_none >= 3600, "{tally:?}");
         missed += tally.missed;
     }
-    // The measured misses (all with a known slip); more would be a regression.
-    assert!(missed <= 17, "Lemke missed {missed} solvable problems");
+    // The measured misses (all with a known slip); more would be a regression. (17 until
+    // the enumeration took the proportional split of redundant sticking points: it now
+    // solves 154 of the 198 problems only Lemke solved, and one more that Lemke misses.)
+    assert!(missed <= 18, "Lemke missed {missed} solvable problems");
 }
 
 /// A random P-matrix of size `k`: `S + K` with `S = R Rᵀ / k + 0.1 I` symmetric positive

@@ -187,13 +187,42 @@ fn linear(
     // left a residual of 9e-4 on a regular 6×6 system of three sliding points (singular
     // values 23…0.94; LU's residual 3e-15): the 16-link chain lying on the floor.
     let svd = lhs.clone().svd(true, true);
-    let x = match svd.solve(&rhs, Real::EPSILON * m as Real * svd.singular_values.max()) {
+    let eps = Real::EPSILON * m as Real * svd.singular_values.max();
+    let mut x = match svd.solve(&rhs, eps) {
         Ok(x) if holds(&x) => x,
         _ => match lhs.clone().lu().solve(&rhs) {
             Some(x) if x.iter().all(|v| v.is_finite()) && holds(&x) => x,
             _ => return None,
         },
     };
+    // Redundant sticking points (a block on two corners, a rod lying flat): the split of
+    // their forces is statically indeterminate, and the minimum-norm one shares the
+    // friction equally, which leaves the cone of the less loaded point (a block on a 30°
+    // slope needed μ ≥ 0.812, what an equal split needs, instead of tan 30° = 0.577). The
+    // split of least Σ x_t,k² / (μ_k x_n,k) is taken instead — each point's friction in
+    // proportion to what its cone allows, within every cone whenever the total fits:
+    // the minimum-norm solution in y_t,k = x_t,k / √(μ_k x_n,k), with the normal forces of
+    // the first solution. Regular systems are left as they were.
+    if svd.rank(eps) < m && modes.contains(&Mode::Stick) {
+        let mut scale = DVector::from_element(m, 1.0);
+        for (i, mode) in modes.iter().enumerate() {
+            if *mode == Mode::Stick {
+                scale[2 * i + 1] = (allowed[i].mu * x[2 * i]).max(0.0).sqrt();
+            }
+        }
+        let mut scaled = lhs.clone();
+        for (j, s) in scale.iter().enumerate() {
+            scaled.column_mut(j).scale_mut(*s);
+        }
+        let svd = scaled.svd(true, true);
+        let eps = Real::EPSILON * m as Real * svd.singular_values.max();
+        if let Ok(y) = svd.solve(&rhs, eps) {
+            let split = y.component_mul(&scale);
+            if holds(&split) {
+                x = split;
+            }
+        }
+    }
     let w = a * &x + b;
     Some((x, w))
 }

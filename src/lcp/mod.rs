@@ -123,10 +123,10 @@ pub fn solutions(
     }
     match solver.solve(a, b, allowed) {
         Ok(s) => Ok(vec![s]),
-        // Lemke's path can end on a ray where a solution exists (a known slip; massive
-        // degeneracy: redundant points at rest, b_n = 0): a few points more are checked by
-        // the enumeration before the problem is declared without solution.
-        Err(e @ LcpError::NoSolution { .. })
+        // Lemke's path can end on a ray where a solution exists (a known slip), or its
+        // solution miss the conditions by rounding (ill-conditioned bases of redundant
+        // points): a few points more are checked by the enumeration before giving up.
+        Err(e @ (LcpError::NoSolution { .. } | LcpError::Inaccurate { .. }))
             if (ENUMERATED_UP_TO + 1..=MAX_ENUMERATED).contains(&allowed.len()) =>
         {
             let all = solve(a, b, allowed).all;
