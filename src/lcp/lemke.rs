@@ -438,9 +438,9 @@ impl Lemke {
             if var < n {
                 self.scratch[var] -= x;
             } else if var < 2 * n {
-                let (j, xs) = (var - n, x / sm);
+                let j = var - n;
                 for k in 0..n {
-                    self.scratch[k] += m[(k, j)] * xs;
+                    self.scratch[k] += m[(k, j)] / sm * x;
                 }
             } else {
                 for k in 0..n {
