@@ -268,6 +268,8 @@ impl PyScene {
             atol,
             dt,
             max_drift,
+            // The scene's rule for simultaneous impacts (not a keyword yet).
+            simultaneous: None,
         };
         let scene = &self.scene;
         let mut settings = scene.settings.clone();
