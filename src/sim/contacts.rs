@@ -112,12 +112,11 @@ impl Simulation<'_> {
             let approaching = |i: usize| touching[i].v_n < -touching[i].still;
             // 1. Impacts, in each group of coupled points with an approaching point; the
             // groups are separate problems.
-            let mut ids: Vec<usize> = Vec::new();
-            for i in (0..touching.len()).filter(|&i| approaching(i)) {
-                if !ids.contains(&group[i]) {
-                    ids.push(group[i]);
-                }
-            }
+            let ids = super::coupling::distinct(
+                (0..touching.len())
+                    .filter(|&i| approaching(i))
+                    .map(|i| group[i]),
+            );
             if !ids.is_empty() {
                 if impacts_here == 0 {
                     self.sample(t, y, true, observer)?;
@@ -728,12 +727,7 @@ impl Simulation<'_> {
         observer: &mut dyn Observer,
     ) -> Result<Selected, SimError> {
         let group = (self.coupling).groups(self.model, resting.iter().map(|p| p.pair));
-        let mut ids: Vec<usize> = Vec::new();
-        for g in &group {
-            if !ids.contains(g) {
-                ids.push(*g);
-            }
-        }
+        let ids = super::coupling::distinct(group.iter().copied());
         if ids.len() <= 1 {
             return self.select_group(t, y, resting, starts_to_slip, observer);
         }

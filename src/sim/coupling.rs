@@ -106,3 +106,14 @@ impl Coupling {
             .collect()
     }
 }
+
+/// The distinct group names of `groups`, in the order they first appear.
+pub fn distinct(groups: impl IntoIterator<Item = usize>) -> Vec<usize> {
+    let mut ids: Vec<usize> = Vec::new();
+    for g in groups {
+        if !ids.contains(&g) {
+            ids.push(g);
+        }
+    }
+    ids
+}
