@@ -66,6 +66,7 @@ pub mod impact;
 pub mod integrate;
 pub mod kinematics;
 pub mod lcp;
+pub mod linalg;
 pub mod log;
 pub mod math;
 pub mod model;

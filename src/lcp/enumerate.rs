@@ -1,11 +1,12 @@
 //! The exact solver of the contact problem: enumeration of the `≤ 4ⁿ` mode combinations
 //! ([`solve`]), and the forces of one known combination ([`forces`]). Each combination is a
-//! linear system solved by SVD (least squares), so rank-deficient `A` (one degree of
+//! linear system solved in least squares (minimum norm, [`MinNorm`]), so rank-deficient `A` (one degree of
 //! freedom) is handled; a combination counts only if its residual vanishes.
 
 use nalgebra::{DMatrix, DVector};
 
 use super::{Allowed, Mode, Solution, Solutions, TOL};
+use crate::linalg::MinNorm;
 use crate::math::Real;
 
 /// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
@@ -81,6 +82,30 @@ pub fn forces(
     mu: &[Real],
     modes: &[Mode],
 ) -> Option<Solution> {
+    forces_with(a, b, mu, modes, None)
+}
+
+/// [`forces`], of the solutions nearest `reference` (`‖x − x_ref‖₂` least) where the
+/// system is rank-deficient: the split of redundant points' forces that changes least
+/// from a known one (the selection's, which met every condition). A regular system has
+/// one solution, the same as [`forces`]'.
+pub fn forces_near(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    mu: &[Real],
+    modes: &[Mode],
+    reference: &DVector<Real>,
+) -> Option<Solution> {
+    forces_with(a, b, mu, modes, Some(reference))
+}
+
+fn forces_with(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    mu: &[Real],
+    modes: &[Mode],
+    reference: Option<&DVector<Real>>,
+) -> Option<Solution> {
     let allowed: Vec<Allowed> = mu
         .iter()
         .zip(modes)
@@ -98,8 +123,8 @@ pub fn forces(
         b,
         &allowed,
         modes,
-        a.amax().max(Real::MIN_POSITIVE),
-        b.amax(),
+        (a.amax().max(Real::MIN_POSITIVE), b.amax()),
+        reference,
     )?;
     Some(Solution {
         modes: modes.to_vec(),
@@ -117,7 +142,7 @@ fn solve_modes(
     scale_a: Real,
     scale_b: Real,
 ) -> Option<Solution> {
-    let (x, w) = linear(a, b, allowed, modes, scale_a, scale_b)?;
+    let (x, w) = linear(a, b, allowed, modes, (scale_a, scale_b), None)?;
     let tol_w = TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE);
     let tol_x = TOL * x.amax().max(Real::MIN_POSITIVE);
     for (i, mode) in modes.iter().enumerate() {
@@ -142,14 +167,15 @@ fn solve_modes(
 }
 
 /// The forces and `w` of the linear system of one combination of modes, if its equations
-/// can hold.
+/// can hold; of several solutions, the nearest `reference` if one is given, else the
+/// proportional split below.
 fn linear(
     a: &DMatrix<Real>,
     b: &DVector<Real>,
     allowed: &[Allowed],
     modes: &[Mode],
-    scale_a: Real,
-    scale_b: Real,
+    (scale_a, scale_b): (Real, Real),
+    reference: Option<&DVector<Real>>,
 ) -> Option<(DVector<Real>, DVector<Real>)> {
     let m = 2 * modes.len();
     // One linear equation per unknown: rows of A (w = 0) or of the identity (x fixed).
@@ -181,20 +207,28 @@ fn linear(
         let res = &lhs * x - &rhs;
         res.amax() <= TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE)
     };
-    // The SVD's minimum-norm least-squares solution (a rank-deficient system: redundant
-    // contact points, e.g. both ends of a link lying flat); if it does not satisfy the
-    // equations, LU with partial pivoting, for a regular system. nalgebra's SVD solve
-    // left a residual of 9e-4 on a regular 6×6 system of three sliding points (singular
-    // values 23…0.94; LU's residual 3e-15): the 16-link chain lying on the floor.
-    let svd = lhs.clone().svd(true, true);
-    let eps = Real::EPSILON * m as Real * svd.singular_values.max();
-    let mut x = match svd.solve(&rhs, eps) {
-        Ok(x) if holds(&x) => x,
-        _ => match lhs.clone().lu().solve(&rhs) {
-            Some(x) if x.iter().all(|v| v.is_finite()) && holds(&x) => x,
-            _ => return None,
-        },
-    };
+    // The minimum-norm least-squares solution (a rank-deficient system: redundant contact
+    // points, e.g. both ends of a link lying flat, or two capsule ends at one hinge). Not
+    // nalgebra's SVD: it left a residual of 2.9e-6 on a well-conditioned system of rank 5
+    // of three sliding points of the 8-link chain (and 9e-4 on a regular one of the 16-link
+    // chain), so that consistent systems were taken for inconsistent ones (src/linalg.rs).
+    let mut ls = MinNorm::new();
+    let mut x = DVector::zeros(m);
+    if let Some(x_ref) = reference {
+        // x = x_ref + δ, δ the least change that meets the equations.
+        let mut delta = DVector::zeros(m);
+        ls.solve(&lhs, &(&rhs - &lhs * x_ref), &mut delta);
+        x = x_ref + delta;
+        if !(x.iter().all(|v| v.is_finite()) && holds(&x)) {
+            return None;
+        }
+        let w = a * &x + b;
+        return Some((x, w));
+    }
+    let rank = ls.solve(&lhs, &rhs, &mut x);
+    if !(x.iter().all(|v| v.is_finite()) && holds(&x)) {
+        return None;
+    }
     // Redundant sticking points (a block on two corners, a rod lying flat): the split of
     // their forces is statically indeterminate, and the minimum-norm one shares the
     // friction equally, which leaves the cone of the less loaded point (a block on a 30°
@@ -203,7 +237,7 @@ fn linear(
     // proportion to what its cone allows, within every cone whenever the total fits:
     // the minimum-norm solution in y_t,k = x_t,k / √(μ_k x_n,k), with the normal forces of
     // the first solution. Regular systems are left as they were.
-    if svd.rank(eps) < m && modes.contains(&Mode::Stick) {
+    if rank < m && modes.contains(&Mode::Stick) {
         let mut scale = DVector::from_element(m, 1.0);
         for (i, mode) in modes.iter().enumerate() {
             if *mode == Mode::Stick {
@@ -214,13 +248,11 @@ fn linear(
         for (j, s) in scale.iter().enumerate() {
             scaled.column_mut(j).scale_mut(*s);
         }
-        let svd = scaled.svd(true, true);
-        let eps = Real::EPSILON * m as Real * svd.singular_values.max();
-        if let Ok(y) = svd.solve(&rhs, eps) {
-            let split = y.component_mul(&scale);
-            if holds(&split) {
-                x = split;
-            }
+        let mut y = DVector::zeros(m);
+        ls.solve(&scaled, &rhs, &mut y);
+        let split = y.component_mul(&scale);
+        if split.iter().all(|v| v.is_finite()) && holds(&split) {
+            x = split;
         }
     }
     let w = a * &x + b;
@@ -373,5 +405,63 @@ mod tests {
                 sol.x.as_slice()
             );
         }
+    }
+
+    /// Two sticking points at one place (identical rows: two capsule ends at one hinge on a
+    /// floor) and a third: the forces of the modes are not unique. `forces_near` keeps a
+    /// valid split it is given, and otherwise changes it least (`x − x_ref` orthogonal to
+    /// the null space: of the solutions, the nearest); on a regular system it is `forces`.
+    #[test]
+    fn forces_near_a_reference_keep_the_split_of_redundant_points() {
+        // J: rows (n0, t0), (n1, t1) = (n0, t0), (n2, t2) of a body with 3 speeds.
+        let j = DMatrix::from_row_slice(
+            6,
+            3,
+            &[
+                1.0, 0.0, 0.3, 0.0, 1.0, -0.2, 1.0, 0.0, 0.3, 0.0, 1.0, -0.2, 1.0, 0.0, -0.7, 0.0,
+                1.0, -0.2,
+            ],
+        );
+        let a = &j * j.transpose();
+        let b = DVector::from_row_slice(&[-9.81, 1.0, -9.81, 1.0, -9.81, 1.0]);
+        let modes = [Mode::Stick; 3];
+        let mu = [0.5; 3];
+        let plain = forces(&a, &b, &mu, &modes).unwrap();
+        assert!(plain.w.amax() <= 1e-12);
+        // The split with all of the hinge's force on its first point.
+        let mut reference = plain.x.clone();
+        reference[0] += plain.x[2];
+        reference[1] += plain.x[3];
+        reference[2] = 0.0;
+        reference[3] = 0.0;
+        let near = forces_near(&a, &b, &mu, &modes, &reference).unwrap();
+        assert!((&near.x - &reference).amax() <= 1e-12, "{}", near.x);
+        assert!(near.w.amax() <= 1e-12);
+        // A reference off the solutions: the nearest solution. Its change is orthogonal
+        // to the null direction (the hinge's force moved from one point to the other).
+        let mut off = reference.clone();
+        off[0] += 0.3;
+        off[5] -= 0.2;
+        let near = forces_near(&a, &b, &mu, &modes, &off).unwrap();
+        assert!(near.w.amax() <= 1e-12);
+        let null = DVector::from_row_slice(&[1.0, 0.0, -1.0, 0.0, 0.0, 0.0]);
+        let tangential_null = DVector::from_row_slice(&[0.0, 1.0, 0.0, -1.0, 0.0, 0.0]);
+        let change = &near.x - &off;
+        assert!(change.dot(&null).abs() <= 1e-12 && change.dot(&tangential_null).abs() <= 1e-12);
+        // A regular system: the one solution.
+        let (a1, b1) = (
+            a.view((4, 4), (2, 2)).into_owned(),
+            b.rows(4, 2).into_owned(),
+        );
+        let one = forces(&a1, &b1, &mu[..1], &modes[..1]).unwrap();
+        let near = forces_near(
+            &a1,
+            &b1,
+            &mu[..1],
+            &modes[..1],
+            &DVector::from_element(2, 5.0),
+        )
+        .unwrap();
+        assert!((&near.x - &one.x).amax() <= 1e-12 * one.x.amax());
     }
 }

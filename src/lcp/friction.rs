@@ -30,20 +30,41 @@
 //! order one, whatever the units of `A` (a positive row and column scaling does not change
 //! the LCP's solutions).
 //!
-//! **Back to modes.** `x_n ≤ TOL max|x|` is open (its forces set to exactly 0); a known
+//! **Back to modes.** `x_n ≤ TOL (max|x| + max|b| / max|A|)` is open (its forces set to
+//! exactly 0; the second term is the problem's unit of force, for solutions `x ≈ 0`); a known
 //! slip slides; else `|w_t| > tol_w` slides along `w_t`, and the rest sticks, where
 //! `tol_w = TOL (max|b| + max|A| max|x|)` is the enumeration's. `Solution::w = A x + b`
 //! as the enumeration computes it. The modes' conditions are checked before the solution
 //! is returned ([`LcpError::Inaccurate`] if rounding broke them).
 //!
-//! **When Lemke fails on a problem that has a solution.** The LCP matrix is copositive
-//! when `A` is positive semidefinite (`zᵀMz = yᵀAy + Σ μ σ x_n ≥ 0`, `y = (x_n, x_t)`),
-//! but not copositive-plus, so ray termination proves that no solution exists only when
-//! `b` is such that `bᵀy ≥ 0` for every `y` of `A`'s null space inside the friction cones
-//! ([CPS, §3.8 and §4.4]): true when `b` is in the range of `A` (`b = J v`, the
-//! velocity level with one restitution coefficient, the frictionless problem, `A`
-//! regular). Otherwise, with redundant contacts wedged against each other, a sliding
-//! solution can exist that Lemke's path misses; `tests/lcp_lemke.rs` measures how often.
+//! **When Lemke's path can end on a ray** (every slip unknown; a known slip makes `M`
+//! non-copositive, Painlevé's case, and none of this holds). `M` is copositive when `A` is
+//! positive semidefinite: for `z ≥ 0`, `zᵀMz = yᵀAy + Σ μ σ x_n ≥ 0`, `y = (x_n, x_t)`
+//! (the `±σ f±` terms of the cone rows cancel). Anitescu and Potra's argument [AP; CPS,
+//! §3.8 and §4.4], in exact arithmetic with the lexicographic rule: a ray is an unbounded
+//! edge `(z + λ z*, z₀)` of the augmented problem with `z₀ > 0` and `z* ≥ 0, z* ≠ 0`,
+//! `M z* ≥ 0`, complementary along the edge: `zᵀM z* = z*ᵀM z* = 0` and
+//! `z*ᵀ(M z + q + d z₀) = 0`. Copositivity at `z* + ε z` gives `z*ᵀM z ≥ −zᵀM z* = 0`, so
+//! `qᵀz* = −z*ᵀM z − z₀ dᵀz* < 0`. Here `z*ᵀM z* = 0` means `A y* = 0` and
+//! `σ*_i x*_n,i = 0`, `M z* ≥ 0` means `f*⁺ + f*⁻ ≤ μ x*_n`, and `qᵀz* = bᵀy*` (`q_σ = 0`).
+//! So **a ray needs contact forces `y*` in the friction cones with `A y* = 0` (`Jᵀy* = 0`:
+//! points jammed, forces that balance each other) and `bᵀy* < 0`**, and there is none:
+//!
+//! - when a velocity `u` lifts every point off (`J_n u > μ |J_t u|` row by row): then
+//!   `uᵀJᵀy* = Σ (J_n u) x*_n + (J_t u) x*_t > 0` for every nonzero `y*` in the cones;
+//!   whatever `b` — bodies on a floor (the chain: `u` lifts everything), every point at
+//!   rest or approaching, with any tangential `b`;
+//! - when `b = J v` is in the range of `A` (`bᵀy* = vᵀJᵀy* = 0`): time stepping [AP], the
+//!   Newton law with `e = 0`, the free accelerations of persistent contacts.
+//!
+//! They can still happen with restitution at jammed points: Newton's law gives
+//! `b = J v⁻ + e (J_n v⁻ on the approaching rows)`, so `bᵀy* = e Σ (J_n v⁻)_i x*_n,i < 0`
+//! when `y*` loads an approaching point (a wedge closing). Then the ray does not prove that
+//! no solution exists either (`M` is not copositive-plus: a sliding solution may exist that
+//! the path misses). In floating point the path must also see exactly-zero basic values as
+//! zero; the rays the 32-link chain met (b_n = 0 at rest, two points at one hinge) were
+//! rounding (`lcp::lemke`, "Numerics"): `tests/lcp_lemke.rs` counts rays on 600 such
+//! problems of up to 32 points (zero) and the misses on random ones.
 //!
 //! References: **[ST]** D. E. Stewart, J. C. Trinkle, *An implicit time-stepping scheme for
 //! rigid body dynamics with inelastic collisions and Coulomb friction*, IJNME 39 (1996).
@@ -54,6 +75,7 @@
 use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 
 use super::lemke::{Lemke, LemkeError, LemkeStatus};
+use super::repair;
 use super::{Allowed, Mode, Solution, TOL};
 use crate::math::Real;
 
@@ -206,12 +228,23 @@ impl Solver {
         match status {
             LemkeStatus::Solved { .. } => {}
             LemkeStatus::RayTermination { .. } => {
+                let known_slip = allowed.iter().any(|c| c.slip.is_some());
+                // With every slip unknown a ray is rounding's (the module doc): the
+                // repair from the pressed points may still find the solution.
+                if !known_slip
+                    && let Some(sol) = repair::repair(a, b, allowed, &repair::start(b, allowed))
+                {
+                    return Ok(sol);
+                }
                 return Err(LcpError::NoSolution {
                     pivots: self.pivots,
-                    known_slip: allowed.iter().any(|c| c.slip.is_some()),
+                    known_slip,
                 });
             }
             LemkeStatus::PivotLimit { .. } => {
+                if let Some(sol) = repair::repair(a, b, allowed, &repair::start(b, allowed)) {
+                    return Ok(sol);
+                }
                 return Err(LcpError::PivotLimit {
                     pivots: self.pivots,
                 });
@@ -233,6 +266,10 @@ impl Solver {
             }
         }
         if violation > CHECK_TOL {
+            // Lemke's modes wrong at a few points: single mode changes from them.
+            if let Some(p) = repair::repair(a, b, allowed, &sol.modes) {
+                return Ok(p);
+            }
             return Err(LcpError::Inaccurate { violation });
         }
         Ok(sol)
@@ -410,7 +447,12 @@ impl Solver {
                 Kind::Normal { tau } => tau * z[o],
             };
         }
-        let tol_x = TOL * x.amax();
+        // Forces in the problem's own unit max|b| / max|A| too: where the solution is x = 0
+        // (every point open) Lemke's degenerate basis leaves x ~ 1e-17, and max|x| alone
+        // would call that noise a contact force.
+        let sa = a.amax();
+        let unit = if sa > 0.0 { b.amax() / sa } else { 0.0 };
+        let tol_x = TOL * (x.amax() + unit);
         let mut modes = Vec::with_capacity(n);
         for i in 0..n {
             if x[2 * i] <= tol_x {

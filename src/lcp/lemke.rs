@@ -28,9 +28,24 @@
 //! and computes the entering column `B⁻¹ a_e` on demand (`n²`). Tolerances are relative:
 //! the problem is scaled to `max|M| = max|q| = 1`, an entry of the entering column counts
 //! as positive above [`PIVOT_TOL`] times the column's largest, ratios tie within
-//! [`TIE_TOL`]. At the end two steps of iterative refinement with the basis' own columns
-//! (`x_B += B⁻¹ (q − B x_B)`) remove the rounding that the pivots accumulated, and
-//! `w = M z + q` is computed from the original data.
+//! [`TIE_TOL`]. After every pivot one step of iterative refinement with the basis' own
+//! columns (`x_B += B⁻¹ (q − B x_B)`, `2n²` flops more) removes the rounding of the update,
+//! and the path ends as soon as `z₀` is within [`Z0_TOL`] of zero (a basic `z₀ = 0`: the
+//! basis is a solution); at the end two more steps, and `w = M z + q` is computed from the
+//! original data, `z₀` counted as 0.
+//!
+//! Why both (issue 15, the 32-link chain on the floor): on degenerate, ill-conditioned
+//! problems (`q_i = 0` for points at rest, nearly equal columns for two points at one
+//! hinge) the path takes pivots of `1.6e-7` and growths of `2.3e4`; the updated `x_B`
+//! drifts by `~1e-9` from `B⁻¹ q` of its own basis. Where `z₀` and another row tie in
+//! exact arithmetic (both reach zero on the same step) their computed ratios then differ by
+//! more than [`TIE_TOL`], the other row leaves, `z₀` stays in the basis at `3.6e-10`
+//! instead of 0, and the path goes on to a ray that exact arithmetic excludes (the same
+//! data in rational arithmetic: solved in 17 and 27 pivots). With the refinement `z₀` is
+//! `4e-20` after that pivot, and the `Z0_TOL` test ends the path there. Neither alone is
+//! enough: without the refinement `z₀` is `3.6e-10` (a tolerance of `1e-9` would be
+//! needed); without the test the refined path still ends on the ray (a replica of this
+//! code in Python, run on both dumps).
 //!
 //! **Why not a crate.** Searched (2026): no maintained Rust crate implements Lemke's
 //! algorithm. `lemke-rs` (GitHub megesdal/lemke-rs, a port of GameTheoryExplorer's
@@ -55,6 +70,11 @@ pub const PIVOT_TOL: Real = 1e-11;
 
 /// Two ratios of the ratio test tie within this relative difference (scaled problem).
 pub const TIE_TOL: Real = 1e-11;
+
+/// A basic `z₀` at most this fraction of its starting value counts as zero: the basis is
+/// then a solution (`z₀` reached zero together with the row that the ratio test chose, a
+/// tie that the rounding of the ratios hid).
+pub const Z0_TOL: Real = 1e-11;
 
 /// How a run of Lemke's algorithm ended (outcomes, not failures: see [`LemkeError`] for
 /// bad input).
@@ -121,6 +141,8 @@ pub struct Lemke {
     scratch: Vec<Real>,
     /// Tied rows of the ratio test.
     ties: Vec<usize>,
+    /// `z₀`'s value when it entered (the scale of [`Z0_TOL`]).
+    z0_start: Real,
     /// The solution `z` (n).
     z: Vec<Real>,
     /// `w = M z + q` (n).
@@ -219,6 +241,9 @@ impl Lemke {
         self.column(m, sm, entering);
         let mut pivots = 0;
         let mut leave = self.ratio_test(true);
+        // z₀'s start −q̂_r / d_r (x_B,r = q̂_r < 0 over col_r = −d_r), and its row.
+        let z0_row = leave.unwrap_or(0);
+        self.z0_start = leave.map_or(0.0, |r| self.xb[r] / self.col[r]);
         loop {
             let Some(r) = leave else {
                 return Ok(LemkeStatus::RayTermination { pivots });
@@ -229,6 +254,14 @@ impl Lemke {
             let left = self.pivot(r, entering);
             pivots += 1;
             if left == z0 {
+                break;
+            }
+            // x_B = B⁻¹ q̂ for the new basis, to rounding: the ratio tests that follow
+            // compare basic values that must be exactly zero on degenerate problems.
+            self.refine(m, q, sm, sq);
+            // z₀ (still in the row it entered) at zero: the basis is complementary but for
+            // the pair of the next entering variable, both nonbasic; a solution.
+            if self.xb[z0_row] <= Z0_TOL * self.z0_start {
                 break;
             }
             // The complement of the variable that left enters.
@@ -386,8 +419,9 @@ impl Lemke {
         std::mem::replace(&mut self.basis[r], e)
     }
 
-    /// One step of iterative refinement of the final basis (`z₀` is not in it):
-    /// `x_B += B⁻¹ (q̂ − Σ_b a_b x_b)`, with the basis' columns `a_b` taken from `M`.
+    /// One step of iterative refinement of the basis: `x_B += B⁻¹ (q̂ − Σ_b a_b x_b)`, with
+    /// the basis' columns `a_b` taken from `M` (`e_j` for `w_j`, `−M̂_:j` for `z_j`, `−d` for
+    /// `z₀`).
     fn refine<R: Dim, C: Dim, S: RawStorage<Real, R, C>, QS: RawStorage<Real, R, U1>>(
         &mut self,
         m: &Matrix<Real, R, C, S>,
@@ -403,10 +437,14 @@ impl Lemke {
             let x = self.xb[b];
             if var < n {
                 self.scratch[var] -= x;
-            } else {
-                let j = var - n;
+            } else if var < 2 * n {
+                let (j, xs) = (var - n, x / sm);
                 for k in 0..n {
-                    self.scratch[k] += m[(k, j)] / sm * x;
+                    self.scratch[k] += m[(k, j)] * xs;
+                }
+            } else {
+                for k in 0..n {
+                    self.scratch[k] += self.cover[k] * x;
                 }
             }
         }

@@ -30,8 +30,9 @@
 mod enumerate;
 mod friction;
 pub mod lemke;
+mod repair;
 
-pub use enumerate::{forces, solve};
+pub use enumerate::{forces, forces_near, solve};
 pub use friction::{CHECK_TOL, LcpError, Solver, conditions_violation};
 
 use nalgebra::DVector;

@@ -134,7 +134,7 @@ impl EventFunctions for GapFunctions<'_> {
             g[slot(c.pair, 1 + 3 * j)] = lambda_n;
             g[slot(c.pair, 2 + 3 * j)] = match c.hold {
                 Hold::Stick => mu * lambda_n - lambda_t.abs(),
-                Hold::Slide(s) => s * self.persistent.points()[i].v_t,
+                Hold::Slide(s) => s * self.persistent.points()[i].v_t + c.slip_margin,
             };
             g[slot(c.pair, 3 + 3 * j)] = self.persistent.painleve(i).min(self.scales.length);
         }

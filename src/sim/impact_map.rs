@@ -13,6 +13,7 @@ use crate::impact::{
 };
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
+use crate::linalg::MinNorm;
 use crate::math::Real;
 use crate::model::{Material, Model, PairId};
 use crate::state::Data;
@@ -546,12 +547,15 @@ impl ImpactMap {
         let m = rows.len();
         let w_rr = DMatrix::from_fn(m, m, |i, j| set.w[(rows[i], rows[j])]);
         let rhs = DVector::from_fn(m, |i, _| -set.v[rows[i]]);
-        let svd = w_rr.svd(true, true);
-        let tol = Real::EPSILON * m as Real * svd.singular_values.max();
-        let p_r = svd.solve(&rhs, tol).map_err(|message| SimError::Contact {
-            t,
-            message: format!("the end of an accumulation of impacts: {message}"),
-        })?;
+        // The minimum-norm solution: W_rr is singular where closing points are redundant.
+        let mut p_r = DVector::zeros(m);
+        MinNorm::new().solve(&w_rr, &rhs, &mut p_r);
+        if !p_r.iter().all(|p| p.is_finite()) {
+            return Err(SimError::Contact {
+                t,
+                message: "the end of an accumulation of impacts: no finite impulse".to_owned(),
+            });
+        }
         let mut x = DVector::zeros(2 * k);
         for (i, &r) in rows.iter().enumerate() {
             x[r] = p_r[i];

@@ -97,6 +97,9 @@ pub struct Simulation<'m> {
     /// The last choice among several consistent contact modes: its time, and how many
     /// times in a row a choice was undone at once (see `select_modes`).
     indeterminate: (Real, usize),
+    /// The points that started to slip at the instant of the last contact stage, and that
+    /// instant (see `slip_starts_at`).
+    slip_starts: (Real, Vec<(PairId, crate::math::Vec2, Real)>),
     /// Scratch state `y`.
     y: Vec<Real>,
     /// Scratch gaps.
@@ -149,6 +152,7 @@ impl<'m> Simulation<'m> {
             h_max_base: settings.integrator.h_max,
             locator_samples: LocatorSettings::default().samples,
             indeterminate: (Real::NEG_INFINITY, 0),
+            slip_starts: (Real::NEG_INFINITY, Vec::new()),
             y: vec![0.0; n],
             gap_values: vec![0.0; npairs],
             next_output: 0,
@@ -193,6 +197,7 @@ impl<'m> Simulation<'m> {
         let t_end = self.settings.t_end;
         loop {
             let t = self.stepper.t();
+            self.gaps.persistent.release_margins();
             self.rearm(t)?;
             if interrupt.is_some_and(|flag| flag.load(Ordering::Relaxed)) {
                 return Ok(StopReason::Interrupted { t });

@@ -65,6 +65,19 @@ pub struct Closed {
     pub local: Vec2,
     /// How it holds.
     pub hold: Hold,
+    /// A sliding point's slip stops when `s V_t ≤ −slip_margin` (m/s): zero for a point
+    /// that was sliding when its mode was selected; for one that starts to slide from rest
+    /// (`|V_t| ≤ v_slip`, the drift of a sticking point), its drift against `s` plus
+    /// `0.1 v_slip`, so that neither that drift nor the rounding of a tangential
+    /// acceleration that is zero at the start stops the slip at once (see `select_group`).
+    pub slip_margin: Real,
+    /// Its forces `(λ_n, λ_t)` in the selection that closed it (N): where the points are
+    /// redundant (two capsule ends at one hinge on a floor) the forces of the modes are not
+    /// unique, and the right-hand side takes those nearest the selection's, which met every
+    /// condition; a split of least norm instead could pull at one point at once, whose
+    /// lift-off event then came back at every selection (the 16-link chain stalled so at
+    /// t = 1.9673 s).
+    pub reference: (Real, Real),
 }
 
 /// One contact point at an instant: its frame and velocities.
@@ -320,13 +333,39 @@ impl Persistent {
             });
         }
         let modes: Vec<Mode> = self.closed.iter().map(|c| c.hold.mode()).collect();
-        let sol = lcp::forces(&self.a, &self.b, &self.mu, &modes).ok_or(SimError::Contact {
-            t,
-            message: "the forces of the closed contact points have no solution".to_owned(),
-        })?;
+        let reference = DVector::from_iterator(
+            2 * self.closed.len(),
+            self.closed
+                .iter()
+                .flat_map(|c| [c.reference.0, c.reference.1]),
+        );
+        let sol = lcp::forces_near(&self.a, &self.b, &self.mu, &modes, &reference).ok_or(
+            SimError::Contact {
+                t,
+                message: "the forces of the closed contact points have no solution".to_owned(),
+            },
+        )?;
         self.lambda = sol.x;
         data.udot.gemv(1.0, &self.minv_jt, &self.lambda, 1.0);
         Ok(())
+    }
+
+    /// Drops the slip margin of each point that started to slide from rest and has got
+    /// going (`s V_t > 2 · margin` at the last evaluation): from then on its slip stops at
+    /// `V_t = 0`, on time. The function drops from `s V_t + margin` to `s V_t`, both
+    /// positive: no crossing is made. Call between steps.
+    pub fn release_margins(&mut self) {
+        if self.points.len() != self.closed.len() {
+            return;
+        }
+        for (c, p) in self.closed.iter_mut().zip(&self.points) {
+            if let Hold::Slide(s) = c.hold
+                && c.slip_margin > 0.0
+                && s * p.v_t > 2.0 * c.slip_margin
+            {
+                c.slip_margin = 0.0;
+            }
+        }
     }
 
     /// The coefficient of friction of closed point `i`.
@@ -381,6 +420,8 @@ impl Persistent {
                 pair: c.pair,
                 local: c.local,
                 hold: Hold::Stick,
+                slip_margin: 0.0,
+                reference: (0.0, 0.0),
             })
             .collect();
         self.set(closed, candidates.iter().map(|c| c.mu).collect());

@@ -1,0 +1,173 @@
+//! Repair of an almost right set of modes: single mode changes, each solving the linear
+//! system of the modes ([`super::forces`]), until every condition of the table in
+//! [`super`] holds.
+//!
+//! Lemke's pivots on the problems of a chain lying on the floor (rank-deficient `A`:
+//! duplicated normal rows of two capsule ends at one hinge, `b_n = 0` at rest) run through
+//! ill-conditioned bases; the modes they end with can be wrong at a few points (the
+//! 32-link chain's impact of 10 points at t = 0.510 s missed its conditions by 1.2e-3 after
+//! the polish). A wrong point shows as a violated condition of its mode, and the change
+//! that condition asks for is the one an active-set method makes (Júdice and Pires' block
+//! principal pivoting, one point at a time, the most violated first): an open point that
+//! is pressed (`w_n < 0`) closes and sticks, a closed one that pulls (`x_n < 0`) opens, a
+//! sticking one outside its cone slides against its friction, a sliding one whose slip
+//! would start against its direction (`s w_t < 0`) sticks. Not a solver with a
+//! guarantee: a start from Lemke's near-solution that settles in a few changes, or `None`.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{Allowed, Mode, Solution, conditions_violation, forces, friction::CHECK_TOL};
+use crate::math::Real;
+
+/// The most mode changes tried: a few per point.
+fn max_changes(n: usize) -> usize {
+    4 * n + 8
+}
+
+/// The modes from `start` repaired until they meet their conditions to [`CHECK_TOL`],
+/// if that happens within a few changes per point.
+pub fn repair(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    allowed: &[Allowed],
+    start: &[Mode],
+) -> Option<Solution> {
+    let mu: Vec<Real> = allowed.iter().map(|c| c.mu).collect();
+    let mut modes = start.to_vec();
+    for _ in 0..max_changes(allowed.len()) {
+        let sol = forces(a, b, &mu, &modes)?;
+        if conditions_violation(a, b, allowed, &sol) <= CHECK_TOL {
+            return Some(sol);
+        }
+        let (i, mode) = worst_point(a, b, allowed, &sol)?;
+        modes[i] = mode;
+    }
+    None
+}
+
+/// The point whose condition is most violated, and the mode that condition asks for.
+fn worst_point(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    allowed: &[Allowed],
+    sol: &Solution,
+) -> Option<(usize, Mode)> {
+    let x = &sol.x;
+    let sx = x.amax().max(Real::MIN_POSITIVE);
+    let sw = (b.amax() + a.amax() * x.amax()).max(Real::MIN_POSITIVE);
+    let w = &sol.w;
+    let closed = |c: &Allowed| c.slip.map_or(Mode::Stick, Mode::Slide);
+    let mut worst: Option<(Real, usize, Mode)> = None;
+    for (i, (c, mode)) in allowed.iter().zip(&sol.modes).enumerate() {
+        let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
+        let mut candidates: [(Real, Option<Mode>); 2] = [(0.0, None); 2];
+        match *mode {
+            Mode::Open => candidates[0] = (-wn / sw, Some(closed(c))),
+            Mode::Stick => {
+                candidates[0] = (-xn / sx, c.open.then_some(Mode::Open));
+                let s = if xt > 0.0 { -1.0 } else { 1.0 };
+                candidates[1] = ((xt.abs() - c.mu * xn) / sx, Some(Mode::Slide(s)));
+            }
+            Mode::Slide(s) => {
+                candidates[0] = (-xn / sx, c.open.then_some(Mode::Open));
+                if c.slip.is_none() {
+                    candidates[1] = (-s * wt / sw, Some(Mode::Stick));
+                }
+            }
+        }
+        for (v, to) in candidates {
+            if let Some(to) = to
+                && v > CHECK_TOL
+                && worst.is_none_or(|w| v > w.0)
+            {
+                worst = Some((v, i, to));
+            }
+        }
+    }
+    worst.map(|w| (w.1, w.2))
+}
+
+/// A start for [`repair`] where Lemke's path gave none: each point closed if it is pressed
+/// with no force (`b_n < 0`), open otherwise.
+pub fn start(b: &DVector<Real>, allowed: &[Allowed]) -> Vec<Mode> {
+    (allowed.iter().enumerate())
+        .map(|(i, c)| {
+            if b[2 * i] < 0.0 || !c.open {
+                c.slip.map_or(Mode::Stick, Mode::Slide)
+            } else {
+                Mode::Open
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lcp::solve;
+
+    /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> Real {
+            self.0 = (self.0)
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
+        }
+    }
+
+    /// From every solution the enumeration finds on random problems of 2–4 contacts
+    /// (`A = J Jᵀ`, `J` random `2n × 3`: rank-deficient from 2 contacts on, like points of
+    /// one body), one point's mode is changed to each other mode it allows; the repair
+    /// must end on modes meeting their conditions whose `w` is one of the enumeration's, or
+    /// give up — never end on modes that are not a solution. Measured at the time of writing:
+    /// 1,585 of 2,307 starts repaired (69 %); the test asks for two in three.
+    #[test]
+    fn a_wrong_mode_is_repaired_to_a_solution_of_the_enumeration() {
+        let mut rng = Lcg(5);
+        let (mut starts, mut repaired) = (0, 0);
+        for k in 0..300 {
+            let n = 2 + k % 3;
+            let j = DMatrix::from_fn(2 * n, 3, |_, _| rng.next());
+            let a = &j * j.transpose();
+            let b = DVector::from_fn(2 * n, |_, _| 2.0 * rng.next());
+            let allowed: Vec<Allowed> = (0..n)
+                .map(|_| Allowed {
+                    mu: 0.8 * (rng.next() + 1.0),
+                    open: true,
+                    slip: None,
+                })
+                .collect();
+            let all = solve(&a, &b, &allowed).all;
+            let scale = b.amax();
+            for sol in &all {
+                for i in 0..n {
+                    for to in [Mode::Open, Mode::Stick, Mode::Slide(1.0), Mode::Slide(-1.0)] {
+                        if to == sol.modes[i] {
+                            continue;
+                        }
+                        let mut start = sol.modes.clone();
+                        start[i] = to;
+                        starts += 1;
+                        let Some(r) = repair(&a, &b, &allowed, &start) else {
+                            continue;
+                        };
+                        repaired += 1;
+                        assert!(conditions_violation(&a, &b, &allowed, &r) <= CHECK_TOL);
+                        assert!(
+                            all.iter().any(|s| (&s.w - &r.w).amax() <= 1e-7 * scale),
+                            "{:?} → {:?}: w {} not the enumeration's",
+                            start,
+                            r.modes,
+                            r.w
+                        );
+                    }
+                }
+            }
+        }
+        println!("{repaired} of {starts} starts repaired");
+        assert!(starts > 1000);
+        assert!(3 * repaired >= 2 * starts, "{repaired} of {starts}");
+    }
+}

@@ -1,0 +1,364 @@
+//! Dense least squares: the minimum-norm solution of a possibly rank-deficient system by a
+//! complete orthogonal decomposition.
+//!
+//! The contact problems are often exactly rank-deficient: two capsule ends at one hinge
+//! lying on a floor give identical rows of `W = J M⁻¹ Jᵀ`, a block on two corners has more
+//! friction unknowns than its one rotation can tell apart. Their systems are otherwise well
+//! conditioned, and a consistent right-hand side must give a residual at rounding level.
+//!
+//! Why not nalgebra's decompositions (0.35): its `SVD` reconstructs a well-conditioned
+//! 6 × 6 matrix of rank 5 (three sliding points of the 8-link chain, singular values 36.8 …
+//! 0.77 and 0) only to 8.6e-4, and `SVD::solve` left a residual of 2.9e-6 on its consistent
+//! system (`tests/linalg.rs` keeps that matrix; dimforge/nalgebra#1117 reports other wrong
+//! solutions); its `ColPivQR` pivots on the largest entry, not the largest column norm,
+//! which does not reveal the rank, and its `solve` needs full rank. No other crate of our
+//! stack has a rank-revealing least-squares solve (faer does, at two minutes of build on
+//! our two cores). What follows is the textbook algorithm (Golub and Van Loan, *Matrix
+//! Computations*, §5.4.1–5.5.2): Householder QR with column pivoting by norms (Businger
+//! and Golub), then the QR of the leading rows' transpose for the minimum norm.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::math::Real;
+
+/// Workspace of [`MinNorm::solve`]; it grows to the largest system solved and is then
+/// reused without allocating.
+#[derive(Clone, Debug, Default)]
+pub struct MinNorm {
+    /// The factor `R` (upper), with the Householder vectors below its diagonal.
+    r: DMatrix<Real>,
+    /// The first entries of the Householder vectors of `R`, and their `β`.
+    head: Vec<Real>,
+    beta: Vec<Real>,
+    /// The column permutation: column `j` of the factored matrix is column `perm[j]` of `A`.
+    perm: Vec<usize>,
+    /// The remaining column norms (squared).
+    norms: Vec<Real>,
+    /// `Qᵀ b`.
+    c: Vec<Real>,
+    /// `R₁ᵀ` (n × r) and its factor, with Householder vectors below the diagonal.
+    t: DMatrix<Real>,
+    head_t: Vec<Real>,
+    beta_t: Vec<Real>,
+    /// The solution in pivoted order.
+    z: Vec<Real>,
+}
+
+/// One Householder reflection `H = I − β v vᵀ` with `H x = α e₀`, for the entries `x` of
+/// a column: returns `(α, v₀, β)`; `v` is `x` with `v₀` in place of `x₀`.
+fn householder(x: impl Iterator<Item = Real> + Clone) -> (Real, Real, Real) {
+    let mut it = x.clone();
+    let x0 = it.next().unwrap_or(0.0);
+    let tail: Real = it.map(|v| v * v).sum();
+    let norm = (x0 * x0 + tail).sqrt();
+    if norm == 0.0 {
+        return (0.0, 0.0, 0.0);
+    }
+    let alpha = if x0 >= 0.0 { -norm } else { norm };
+    let v0 = x0 - alpha;
+    let vv = v0 * v0 + tail;
+    let beta = if vv > 0.0 { 2.0 / vv } else { 0.0 };
+    (alpha, v0, beta)
+}
+
+impl MinNorm {
+    /// A workspace.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The minimum-norm least-squares solution of `A x = b`: of the `x` that minimise
+    /// `‖A x − b‖₂`, the one of least `‖x‖₂`. `A` is `m × n`; `x` is resized to `n`. The
+    /// rank is decided by the pivoted `R`: column `k` counts if its remaining norm exceeds
+    /// `max(m, n) · ε · ‖the first pivot column‖`. Returns the rank.
+    ///
+    /// ```text
+    /// A P = Q [R₁₁ R₁₂; 0 0],  R₁ = [R₁₁ R₁₂] (r × n),   R₁ᵀ = Q₂ [T; 0],
+    /// x = P Q₂ [T⁻ᵀ (Qᵀ b)₁..r ; 0]
+    /// ```
+    pub fn solve(&mut self, a: &DMatrix<Real>, b: &DVector<Real>, x: &mut DVector<Real>) -> usize {
+        let (m, n) = a.shape();
+        debug_assert_eq!(b.len(), m);
+        self.r.resize_mut(m, n, 0.0);
+        self.r.copy_from(a);
+        self.c.clear();
+        self.c.extend(b.iter());
+        self.perm.clear();
+        self.perm.extend(0..n);
+        self.head.clear();
+        self.beta.clear();
+        self.norms.clear();
+        self.norms
+            .extend((0..n).map(|j| self.r.column(j).norm_squared()));
+        let first = self.norms.iter().copied().fold(0.0, Real::max).sqrt();
+        let tol = m.max(n) as Real * Real::EPSILON * first;
+        let mut rank = 0;
+        for k in 0..m.min(n) {
+            // The column of largest remaining norm (recomputed: no downdating error).
+            let mut best = (k, -1.0);
+            for j in k..n {
+                let s: Real = (k..m).map(|i| self.r[(i, j)] * self.r[(i, j)]).sum();
+                self.norms[j] = s;
+                if s > best.1 {
+                    best = (j, s);
+                }
+            }
+            if best.1.sqrt() <= tol {
+                break;
+            }
+            self.r.swap_columns(k, best.0);
+            self.perm.swap(k, best.0);
+            let (alpha, v0, beta) = householder((k..m).map(|i| self.r[(i, k)]));
+            // Apply H to the columns right of k and to c: y −= β v (vᵀ y).
+            for j in k + 1..n {
+                let dot = v0 * self.r[(k, j)]
+                    + (k + 1..m)
+                        .map(|i| self.r[(i, k)] * self.r[(i, j)])
+                        .sum::<Real>();
+                let f = beta * dot;
+                self.r[(k, j)] -= f * v0;
+                for i in k + 1..m {
+                    let vi = self.r[(i, k)];
+                    self.r[(i, j)] -= f * vi;
+                }
+            }
+            let dot = v0 * self.c[k] + (k + 1..m).map(|i| self.r[(i, k)] * self.c[i]).sum::<Real>();
+            let f = beta * dot;
+            self.c[k] -= f * v0;
+            for i in k + 1..m {
+                self.c[i] -= f * self.r[(i, k)];
+            }
+            self.r[(k, k)] = alpha;
+            self.head.push(v0);
+            self.beta.push(beta);
+            rank = k + 1;
+        }
+        let r = rank;
+        self.z.clear();
+        self.z.resize(n, 0.0);
+        if r == n {
+            // Full column rank: back substitution R₁₁ z = c.
+            for i in (0..n).rev() {
+                let s: Real = (i + 1..n).map(|j| self.r[(i, j)] * self.z[j]).sum();
+                self.z[i] = (self.c[i] - s) / self.r[(i, i)];
+            }
+        } else if r > 0 {
+            // R₁ᵀ = Q₂ [T; 0]: Householder QR of the n × r transpose of the first r rows.
+            self.t.resize_mut(n, r, 0.0);
+            for i in 0..n {
+                for j in 0..r {
+                    self.t[(i, j)] = if i >= j { self.r[(j, i)] } else { 0.0 };
+                }
+            }
+            self.head_t.clear();
+            self.beta_t.clear();
+            for k in 0..r {
+                let (alpha, v0, beta) = householder((k..n).map(|i| self.t[(i, k)]));
+                for j in k + 1..r {
+                    let dot = v0 * self.t[(k, j)]
+                        + (k + 1..n)
+                            .map(|i| self.t[(i, k)] * self.t[(i, j)])
+                            .sum::<Real>();
+                    let f = beta * dot;
+                    self.t[(k, j)] -= f * v0;
+                    for i in k + 1..n {
+                        let vi = self.t[(i, k)];
+                        self.t[(i, j)] -= f * vi;
+                    }
+                }
+                self.t[(k, k)] = alpha;
+                self.head_t.push(v0);
+                self.beta_t.push(beta);
+            }
+            // Tᵀ y = c₁ (forward substitution), z = Q₂ [y; 0].
+            for i in 0..r {
+                let s: Real = (0..i).map(|j| self.t[(j, i)] * self.z[j]).sum();
+                self.z[i] = (self.c[i] - s) / self.t[(i, i)];
+            }
+            for k in (0..r).rev() {
+                let (v0, beta) = (self.head_t[k], self.beta_t[k]);
+                let dot =
+                    v0 * self.z[k] + (k + 1..n).map(|i| self.t[(i, k)] * self.z[i]).sum::<Real>();
+                let f = beta * dot;
+                self.z[k] -= f * v0;
+                for i in k + 1..n {
+                    self.z[i] -= f * self.t[(i, k)];
+                }
+            }
+        }
+        if x.len() != n {
+            *x = DVector::zeros(n);
+        }
+        for (j, &p) in self.perm.iter().enumerate() {
+            x[p] = self.z[j];
+        }
+        rank
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> Real {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
+        }
+        fn matrix(&mut self, m: usize, n: usize) -> DMatrix<Real> {
+            DMatrix::from_fn(m, n, |_, _| self.next())
+        }
+    }
+
+    /// An orthogonal matrix: the Q of a random matrix.
+    fn orthogonal(rng: &mut Lcg, n: usize) -> DMatrix<Real> {
+        rng.matrix(n, n).qr().q()
+    }
+
+    #[test]
+    fn a_rank_deficient_system_of_known_svd_gets_its_minimum_norm_solution() {
+        // A = U Σ Vᵀ with chosen singular values (some zero): the minimum-norm least-squares
+        // solution is V Σ⁺ Uᵀ b, whatever b (consistent or not).
+        let mut rng = Lcg(7);
+        for (m, n, sigma) in [
+            (6, 6, vec![36.8, 21.9, 1.04, 1.04, 0.77, 0.0]),
+            (8, 8, vec![5.0, 3.0, 2.0, 1.0, 0.5, 0.0, 0.0, 0.0]),
+            (5, 7, vec![2.0, 1.0, 1.0, 0.0, 0.0]),
+            (7, 4, vec![3.0, 2.0, 0.0, 0.0]),
+            (4, 4, vec![1e3, 1.0, 1e-3, 1e-6]),
+            (3, 3, vec![0.0, 0.0, 0.0]),
+        ] {
+            let (u, v) = (orthogonal(&mut rng, m), orthogonal(&mut rng, n));
+            let mut s = DMatrix::zeros(m, n);
+            for (i, x) in sigma.iter().enumerate() {
+                s[(i, i)] = *x;
+            }
+            let a = &u * &s * v.transpose();
+            let b = DVector::from_fn(m, |_, _| rng.next());
+            let mut s_plus = DMatrix::zeros(n, m);
+            for (i, x) in sigma.iter().enumerate() {
+                if *x > 0.0 {
+                    s_plus[(i, i)] = 1.0 / x;
+                }
+            }
+            let expected = &v * s_plus * u.transpose() * &b;
+            let mut x = DVector::zeros(0);
+            let rank = MinNorm::new().solve(&a, &b, &mut x);
+            assert_eq!(rank, sigma.iter().filter(|x| **x > 0.0).count(), "{m}×{n}");
+            let scale = expected.amax().max(1.0);
+            assert!(
+                (&x - &expected).amax() <= 1e-9 * scale,
+                "{m}×{n}: {:e}",
+                (&x - &expected).amax()
+            );
+        }
+    }
+
+    #[test]
+    fn a_regular_system_gets_the_solution_of_lu() {
+        let mut rng = Lcg(11);
+        let mut ws = MinNorm::new();
+        let mut x = DVector::zeros(0);
+        for n in [1, 2, 5, 12, 40] {
+            let a = rng.matrix(n, n) + DMatrix::identity(n, n) * 3.0;
+            let b = DVector::from_fn(n, |_, _| rng.next());
+            assert_eq!(ws.solve(&a, &b, &mut x), n);
+            let lu = a.clone().lu().solve(&b).unwrap();
+            assert!((&x - &lu).amax() <= 1e-13 * lu.amax(), "{n}");
+        }
+    }
+
+    #[test]
+    // The dumped values as printed (17 decimals): they parse to the run's doubles.
+    #[allow(clippy::excessive_precision)]
+    fn three_sliding_points_of_the_chain_with_two_at_one_hinge_are_solved_to_rounding() {
+        // The mode system of three sliding points (μ = 0.3, slip +1) of the 8-link chain
+        // at t = 9.774 s (scenes/chain.toml): points 0 and 2, two capsule ends at one
+        // hinge, have identical normal rows (rank 5 of 6, the other singular values
+        // 31.4 … 0.56) and b_n equal to 3e-15 relative. nalgebra's SVD::solve left a
+        // residual of 2.9e-6 on it, and the run stopped: "the forces of the closed contact
+        // points have no solution".
+        let a = DMatrix::from_row_slice(
+            6,
+            6,
+            &[
+                1.22118106648984384e1,
+                6.65926996340335031e-1,
+                -4.35600534008838691e-1,
+                -9.42822737794350374e0,
+                1.22118106648984384e1,
+                3.45934486334052382e-1,
+                6.65926996340334698e-1,
+                5.00742551153329618e0,
+                -3.49724136347787251e0,
+                1.23626105242017070e0,
+                6.65926996340334698e-1,
+                4.45363738162639855e0,
+                -4.35600534008838802e-1,
+                -3.49724136347787207e0,
+                2.12325547523530069e1,
+                1.55236876320411366e1,
+                -4.35600534008838802e-1,
+                -1.22187821842321243e0,
+                -9.42822737794350374e0,
+                1.23626105242017115e0,
+                1.55236876320411348e1,
+                2.22423064633132732e1,
+                -9.42822737794350374e0,
+                2.95898813866214372e0,
+                1.22118106648984384e1,
+                6.65926996340335031e-1,
+                -4.35600534008838691e-1,
+                -9.42822737794350374e0,
+                1.22118106648984384e1,
+                3.45934486334052382e-1,
+                3.45934486334052438e-1,
+                4.45363738162639944e0,
+                -1.22187821842321176e0,
+                2.95898813866214505e0,
+                3.45934486334052438e-1,
+                4.17062385668894997e0,
+            ],
+        );
+        let b = DVector::from_row_slice(&[
+            -2.34799095179703272e1,
+            -7.50291608884479899e0,
+            -1.82955588057435392e0,
+            6.77809946144794395e0,
+            -2.34799095179700146e1,
+            -9.95370893338296803e0,
+        ]);
+        let mu = 0.3;
+        let mut lhs = DMatrix::zeros(6, 6);
+        let mut rhs = DVector::zeros(6);
+        for i in 0..3 {
+            lhs.row_mut(2 * i).copy_from(&a.row(2 * i));
+            rhs[2 * i] = -b[2 * i];
+            lhs[(2 * i + 1, 2 * i + 1)] = 1.0;
+            lhs[(2 * i + 1, 2 * i)] = mu;
+        }
+        let mut x = DVector::zeros(0);
+        assert_eq!(MinNorm::new().solve(&lhs, &rhs, &mut x), 5);
+        let residual = (&lhs * &x - &rhs).amax();
+        assert!(residual <= 1e-13 * rhs.amax(), "{residual:e}");
+    }
+
+    #[test]
+    fn the_workspace_serves_systems_of_any_size_in_turn() {
+        let mut rng = Lcg(3);
+        let mut ws = MinNorm::new();
+        let mut x = DVector::zeros(0);
+        for (m, n) in [(10, 10), (2, 2), (6, 3), (3, 6), (10, 10)] {
+            let a = rng.matrix(m, n);
+            let b = &a * DVector::from_fn(n, |_, _| rng.next());
+            ws.solve(&a, &b, &mut x);
+            assert_eq!(x.len(), n);
+            assert!((&a * &x - &b).amax() <= 1e-12, "{m}×{n}");
+        }
+    }
+}
