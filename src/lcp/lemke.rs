@@ -27,7 +27,8 @@
 //! basic values `x_B = B⁻¹ q`, updated by one Gauss–Jordan step per pivot (`2n²` flops),
 //! and computes the entering column `B⁻¹ a_e` on demand (`n²`). Tolerances are relative:
 //! the problem is scaled to `max|M| = max|q| = 1`, an entry of the entering column counts
-//! as positive above [`PIVOT_TOL`] times the column's largest, ratios tie within
+//! as positive above [`PIVOT_TOL`] times the column's largest (and is zero when it is a
+//! cancellation below [`CANCEL_TOL`] of its terms), ratios tie within
 //! [`TIE_TOL`]. After every pivot one step of iterative refinement with the basis' own
 //! columns (`x_B += B⁻¹ (q − B x_B)`, `2n²` flops more) removes the rounding of the update,
 //! and the path ends as soon as `z₀` is within [`Z0_TOL`] of zero (a basic `z₀ = 0`: the
@@ -67,6 +68,15 @@ use crate::math::Real;
 /// fraction of the column's largest magnitude (scaled problem). Below it the entry is
 /// rounding of a zero: pivoting on it would blow up `B⁻¹`.
 pub const PIVOT_TOL: Real = 1e-11;
+
+/// An entry `Σ_k B⁻¹_ik a_k` of a `z_j`'s entering column below this fraction of
+/// `Σ_k |B⁻¹_ik a_k|` is the rounding of a zero and is set to 0: pivoting on it makes `B`
+/// singular. The 16-link chain (an 11-point impact, `tests/lcp_lemke.rs`) pivoted on such
+/// an entry, `1.1e-11` of its terms (`1.3e-11` of the column's largest, past
+/// [`PIVOT_TOL`]); `B⁻¹` grew to `3e10` and the "solution" had `w_n = −0.03`. Measured on
+/// that path: the rounding zeros reach `1.1e-11` of their terms, the smallest other entries
+/// `7.9e-10`; the tolerance sits between.
+pub const CANCEL_TOL: Real = 1e-10;
 
 /// Two ratios of the ratio test tie within this relative difference (scaled problem).
 pub const TIE_TOL: Real = 1e-11;
@@ -324,7 +334,16 @@ impl Lemke {
                 row[e]
             } else if e < 2 * n {
                 let j = e - n;
-                -(0..n).map(|k| row[k] * m[(k, j)]).sum::<Real>() / sm
+                let (sum, size) = (0..n).fold((0.0 as Real, 0.0 as Real), |(s, a), k| {
+                    let t = row[k] * m[(k, j)];
+                    (s + t, a + t.abs())
+                });
+                // Cancellation down to the rounding of B⁻¹: a zero (CANCEL_TOL).
+                if sum.abs() <= CANCEL_TOL * size {
+                    0.0
+                } else {
+                    -sum / sm
+                }
             } else {
                 -row.iter()
                     .zip(&self.cover[..n])
