@@ -36,7 +36,7 @@ impl SceneContact {
 
 /// The name of a pair, `a/b` (its colliders' names, as in the impact table of `ricochet run`).
 pub fn pair_name(model: &Model, pair: PairId) -> String {
-    let p = &model.pairs()[pair.index()];
+    let p = &model.pair_of(pair);
     let name = |c: ColliderId| model.colliders()[c.index()].name.as_str();
     format!("{}/{}", name(p.a), name(p.b))
 }
@@ -89,6 +89,6 @@ pub fn scene_contact(
         gap: contact.gap,
         w,
         v: ContactVelocity::new(frame.v_n(), frame.v_t()),
-        material: model.pairs()[id.index()].material,
+        material: model.pair_of(id).material,
     })
 }

@@ -171,7 +171,7 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
     }
 
     fn impact(&mut self, model: &Model, ev: &ImpactEvent) -> Result<(), ObserverError> {
-        let pair = &model.pairs()[ev.frame.pair.index()];
+        let pair = model.pair_of(ev.frame.pair);
         let name = |c: ricochet::model::ColliderId| model.colliders()[c.index()].name.clone();
         self.rows.push(Row {
             t: ev.t,
