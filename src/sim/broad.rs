@@ -9,7 +9,7 @@
 //!
 //!    ```text
 //!    m_c = V_c H + ½ |g| H² + s,   V_c = |v_G| + |ω| (|c − G| + r),
-//!    H = min(h_max, 1.01 h_next)
+//!    H = min(h_max, 1.01 · 10 h_next)
 //!    ```
 //!
 //!    with `V_c` the speed bound of the collider's points that holds as its body turns (the
@@ -19,9 +19,11 @@
 //!    candidates). A pair that is not a candidate has a gap `d > (V_a + V_b) H + |g| H²`
 //!    (the boxes hold the shapes), so the time it takes to close it at `V = V_a + V_b`
 //!    under gravity, `2d / (V + √(V² + 2|g|d))`, exceeds `H`: its term in the step cap is
-//!    beyond the step the integrator tries (with the 1 % by which it may stretch a step to
-//!    land on the stop time) or beyond `h_max`, so the cap over the candidates gives the
-//!    integrator the *same step*, bit for bit, as the cap over every pair did.
+//!    beyond `h_max`, or beyond the step the integrator tries (with the 1 % by which it
+//!    may stretch a step to land on the stop time) and beyond the step it suggests after
+//!    it (at most [`GROWTH`] times longer), which an impact's reset clips to the cap. So
+//!    the cap over the candidates gives the integrator the *same steps*, bit for bit, as
+//!    the cap over every pair did (`tests/broad_phase.rs` runs with and without it).
 //! 2. **After the step** (for the event location): each collider's box is grown to hold
 //!    also its boxes at the `k + 2` times where the locator samples the step (`k = 4`), each
 //!    grown by `V_c(t_j) Δ`, what the collider travels in a whole sample interval `Δ` at
@@ -44,6 +46,10 @@ use crate::kinematics::{KinematicsError, collider_pose};
 use crate::math::{Real, Vec2, perp};
 use crate::model::{ColliderId, Model, PairId};
 use crate::state::Data;
+
+/// The largest growth of the step from one step to the next of the adaptive methods
+/// (`fac_max`: DOPRI5 10, DOP853 6).
+pub(super) const GROWTH: Real = 10.0;
 
 /// The speed bound `V_c` of the points of collider `c` (m/s), the radius `r` of its bounding
 /// circle (m) and its body's rotation rate `|ω|` (rad/s), at the positions and velocities of
