@@ -105,6 +105,18 @@ impl GapFunctions<'_> {
         self.open_gap_here(pair, t)
     }
 
+    /// The positions at `(t, y)`, for [`Self::open_gap_at_positions`] (one kinematics pass
+    /// for the gaps of many pairs).
+    pub fn set_positions(&mut self, t: Real, y: &[Real]) -> Result<(), Nested> {
+        let n = self.model.nq();
+        update_positions(self.model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))
+    }
+
+    /// [`Self::open_gap`] at the positions of the last [`Self::set_positions`] (at `t`).
+    pub fn open_gap_at_positions(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
+        self.open_gap_here(pair, t)
+    }
+
     /// The other point of a pair with one closed point at `local`: of its (at most two)
     /// candidates, the one farther from the closed point (which moves on `a` as it slides
     /// or rolls). At the positions of `self.data`.

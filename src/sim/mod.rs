@@ -479,6 +479,13 @@ impl<'m> Simulation<'m> {
         // Gravity speeds the bodies up within the step: the time to cover d from speed V
         // at |g| is 2d / (V + √(V² + 2|g|d)).
         let g = self.model.gravity().length();
+        // One kinematics pass for the gaps of every pair below.
+        self.gaps
+            .set_positions(t, self.stepper.y())
+            .map_err(|e| SimError::Contact {
+                t,
+                message: format!("the positions for the gaps: {e}"),
+            })?;
         for r in 0..self.gaps.candidates.len() {
             if !self.armed[gaps::SLOTS * r] {
                 continue;
@@ -498,7 +505,7 @@ impl<'m> Simulation<'m> {
             }
             let d = self
                 .gaps
-                .open_gap(id, t, self.stepper.y())
+                .open_gap_at_positions(id, t)
                 .map_err(|e| SimError::Contact {
                     t,
                     message: format!("the gap of {}: {e}", impact_map::pair_name(self.model, id)),
