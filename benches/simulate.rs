@@ -157,7 +157,7 @@ fn simulate_bench(c: &mut Criterion) {
     println!(
         "\nkane_double_pendulum, e = 1 (override), μ = {}, t_end = {T_END} s, output {RATE} Hz, \
          {:?} rtol {:e} atol {:e}",
-        s.model.pairs()[0].material.mu,
+        s.model.pairs().next().unwrap().material.mu,
         s.settings.integrator.method,
         s.settings.integrator.rtol,
         s.settings.integrator.atol,

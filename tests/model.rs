@@ -112,7 +112,6 @@ fn default_pairs_skip_parent_and_child_and_rules_override_them() {
     let model = b.clone().build().unwrap();
     let names = |m: &Model| -> Vec<String> {
         m.pairs()
-            .iter()
             .map(|p| {
                 format!(
                     "{}-{}",
@@ -129,7 +128,7 @@ fn default_pairs_skip_parent_and_child_and_rules_override_them() {
             "a-d", "a-floor", "a-wall", "c-floor", "c-wall", "d-floor", "d-wall"
         ]
     );
-    assert!(model.pairs().iter().all(|p| p.material == base));
+    assert!(model.pairs().all(|p| p.material == base));
 
     let rough = Material {
         law: Law::Stronge,
@@ -146,17 +145,15 @@ fn default_pairs_skip_parent_and_child_and_rules_override_them() {
             "a-c", "a-d", "a-wall", "c-floor", "c-wall", "d-floor", "d-wall"
         ]
     );
-    let d_floor = model
-        .pairs()
-        .iter()
-        .find(|p| p.a == cd && p.b == floor)
-        .unwrap();
+    let d_floor = model.pairs().find(|p| p.a == cd && p.b == floor).unwrap();
     assert_eq!(d_floor.material, rough);
     // pair_between finds each pair from its colliders, in either order, and no other.
-    for (k, p) in model.pairs().iter().enumerate() {
-        assert_eq!(model.pair_between(p.a, p.b).map(|id| id.index()), Some(k));
-        assert_eq!(model.pair_between(p.b, p.a).map(|id| id.index()), Some(k));
+    for (id, p) in model.pair_ids().zip(model.pairs()) {
+        assert_eq!(model.pair_between(p.a, p.b), Some(id));
+        assert_eq!(model.pair_between(p.b, p.a), Some(id));
+        assert_eq!(model.pair(id), Some(p));
     }
+    assert_eq!(model.pair_count(), 7);
     assert_eq!(model.pair_between(cc, cd), None, "parent and child");
     assert_eq!(model.pair_between(floor, ca), None, "disabled");
 
@@ -353,4 +350,130 @@ fn validation_errors_carry_evidence() {
     let mut self_pair = b.clone();
     self_pair.pair(cr, cr, None);
     assert!(matches!(self_pair.build(), Err(ModelError::BadPair { .. })));
+}
+
+/// Issue 15 (pairs in linear memory): the model lists no pairs; what it answers on demand
+/// — `pair_ids`, `pairs`, `pair_between`, `pair`, `pair_count` — equals an `n × n` table
+/// built the obvious way (the default rule, then every rule in order, the last one on a
+/// pair winning), on 200 random trees with colliders on bodies and in the world and random
+/// rules. Pair ids are stable: `i · 2³² + j` for the colliders `i < j`.
+#[test]
+fn pairs_on_demand_equal_a_table_of_the_rules() {
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = |k: usize| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % k as u64) as usize
+    };
+    let base = Material {
+        law: Law::Newton,
+        e: 0.5,
+        mu: 0.2,
+    };
+    for case in 0..200 {
+        let mut b = Model::builder();
+        b.default_material(base);
+        let nbody = 1 + next(8);
+        let mut bodies = Vec::new();
+        let mut parent_of = Vec::new();
+        for k in 0..nbody {
+            let parent = if k == 0 || next(3) == 0 {
+                None
+            } else {
+                Some(next(k))
+            };
+            let id = b.add_body(
+                body(&format!("b{k}")),
+                Joint::revolute(format!("b{k}"), parent.map(|p| bodies[p]), Pose::identity()),
+            );
+            bodies.push(id);
+            parent_of.push(parent);
+        }
+        // Colliders interleaved: on a body (its index) or in the world (None).
+        let mut owner: Vec<Option<usize>> = Vec::new();
+        let mut ids = Vec::new();
+        for c in 0..2 + next(10) {
+            let on = (next(4) != 0).then(|| next(nbody));
+            ids.push(b.add_collider(ball(&format!("c{c}"), on.map(|k| bodies[k]))));
+            owner.push(on);
+        }
+        let n = ids.len();
+        let mut table = vec![vec![None; n]; n];
+        for i in 0..n {
+            for j in i + 1..n {
+                let touch = match (owner[i], owner[j]) {
+                    (None, None) => false,
+                    (Some(_), None) | (None, Some(_)) => true,
+                    (Some(x), Some(y)) => {
+                        x != y && parent_of[x] != Some(y) && parent_of[y] != Some(x)
+                    }
+                };
+                table[i][j] = touch.then_some(base);
+            }
+        }
+        for r in 0..next(12) {
+            let (x, y) = (next(n), next(n));
+            let valid = x != y
+                && !(owner[x].is_none() && owner[y].is_none())
+                && (owner[x].is_none() || owner[x] != owner[y]);
+            if !valid {
+                continue;
+            }
+            let (i, j) = (x.min(y), x.max(y));
+            match next(3) {
+                0 => {
+                    b.disable_pair(ids[x], ids[y]);
+                    table[i][j] = None;
+                }
+                1 => {
+                    b.pair(ids[x], ids[y], None);
+                    table[i][j] = Some(base);
+                }
+                _ => {
+                    let m = Material {
+                        law: Law::Poisson,
+                        e: 0.1 * (r % 10) as f64,
+                        mu: r as f64,
+                    };
+                    b.pair(ids[x], ids[y], Some(m));
+                    table[i][j] = Some(m);
+                }
+            }
+        }
+        let model = b.build().unwrap_or_else(|e| panic!("case {case}: {e}"));
+        let mut expected = Vec::new();
+        for i in 0..n {
+            for j in i + 1..n {
+                let id = model.pair_between(ids[i], ids[j]);
+                assert_eq!(id, model.pair_between(ids[j], ids[i]), "case {case}");
+                assert_eq!(
+                    id.is_some(),
+                    table[i][j].is_some(),
+                    "case {case} ({i}, {j})"
+                );
+                if let (Some(id), Some(m)) = (id, table[i][j]) {
+                    assert_eq!(
+                        id.index(),
+                        (i << 32) | j,
+                        "case {case}: the id of ({i}, {j})"
+                    );
+                    assert_eq!(id.colliders(n), Some((ids[i], ids[j])), "case {case}");
+                    let p = model.pair(id).unwrap();
+                    // `a` on a body, `b` the other one.
+                    let (a, b) = if owner[i].is_some() { (i, j) } else { (j, i) };
+                    assert_eq!((p.a, p.b, p.material), (ids[a], ids[b], m), "case {case}");
+                    assert_eq!(model.pair_of(id), p, "case {case}");
+                    expected.push(id);
+                }
+            }
+        }
+        assert_eq!(
+            model.pair_ids().collect::<Vec<_>>(),
+            expected,
+            "case {case}"
+        );
+        assert_eq!(model.pair_count(), expected.len(), "case {case}");
+        assert_eq!(model.pairs().count(), expected.len(), "case {case}");
+    }
 }

@@ -245,6 +245,26 @@ impl EventLocator {
         }
     }
 
+    /// Changes the number of event functions to `m` (a broad phase samples a different set
+    /// of functions each step). The vectors keep their allocations as `m` shrinks.
+    pub fn set_len(&mut self, m: usize) {
+        if m == self.m {
+            return;
+        }
+        let k2 = self.settings.samples + 2;
+        self.m = m;
+        self.samples.gs.resize(k2 * m, 0.0);
+        self.samples.gds.resize(k2 * m, 0.0);
+        for v in [
+            &mut self.scratch.g,
+            &mut self.scratch.gd,
+            &mut self.scratch.g2,
+        ] {
+            v.resize(m, 0.0);
+        }
+        self.done.resize(m, false);
+    }
+
     /// The settings.
     pub fn settings(&self) -> &LocatorSettings {
         &self.settings

@@ -14,7 +14,7 @@ use super::{
     Log, LogError, LogLevel, LogWriter, Planar, SceneUpdate, StateRecord, SupportRecord,
 };
 use crate::math::{Pose, Real, Vec2};
-use crate::model::Model;
+use crate::model::{Model, PairId};
 use crate::settings::Settings;
 use crate::sim::{
     ImpactEvent, Level, MaterialOverride, Observer, ObserverError, PairMode, RunSummary, Sample,
@@ -69,8 +69,11 @@ pub struct RunLogger<W: Write + Seek + Send + 'static> {
     local_boxes: Vec<Aabb>,
     /// The `view` frame that keeps the mechanism in view.
     view: ViewTracker,
-    /// The `/state` record, updated in place at each sample (no allocation).
+    /// The `/state` record, updated in place at each sample (no allocation while the
+    /// sample lists the same pairs).
     state: StateRecord,
+    /// The pairs of `state.contacts`.
+    listed: Vec<PairId>,
     /// The `/tf` message, updated in place at each sample: a transform per body, then
     /// `view → world`.
     tf: FrameTransforms,
@@ -113,16 +116,14 @@ impl<W: Write + Seek + Send + 'static> RunLogger<W> {
         let extent = start.maxs - start.mins;
         let view = ViewTracker::new(&start);
 
-        let contacts = (names.pairs.iter())
-            .map(|name| ContactState::new(name.clone(), ContactMode::Free, 0.0))
-            .collect();
-        let state = StateRecord::new(t0, vec![], vec![], Energy::new(0.0, 0.0), contacts, 0);
+        let state = StateRecord::new(t0, vec![], vec![], Energy::new(0.0, 0.0), vec![], 0);
         let identity = crate::math::Pose::identity();
         let mut tf = draw::body_transforms(t0, bodies.iter().map(|b| (b.as_str(), identity)))?;
         tf.transforms.push(view.transform(t0)?);
         Ok(Self {
             writer,
             names,
+            listed: Vec::new(),
             gap_tol,
             impacts: 0,
             arrow: ArrowStyle::for_size(extent.x.max(extent.y)),
@@ -207,49 +208,64 @@ impl Audit {
 }
 
 /// The names that a model's ledger entries carry: each contact pair's name and the bodies
-/// of its two sides.
+/// of its two sides, made on demand from the colliders' (a model lists no pairs).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LedgerNames {
-    /// Pair names `<collider a>/<collider b>`, in pair order.
-    pub pairs: Vec<String>,
-    /// Body names of each pair's two sides (`world` for an obstacle), in pair order.
-    pub sides: Vec<(String, String)>,
+    /// The name of each collider.
+    colliders: Vec<String>,
+    /// The body of each collider (`world` for an obstacle), and whether it is on a body.
+    sides: Vec<(String, bool)>,
 }
 
 impl LedgerNames {
     /// The names of `model`'s pairs.
     pub fn new(model: &Model) -> LedgerNames {
-        let side = |c: crate::model::ColliderId| -> String {
-            model.colliders()[c.index()].body.map_or_else(
-                || "world".to_owned(),
-                |b| model.bodies()[b.index()].name.clone(),
-            )
-        };
-        let pairs = (model.pairs().iter())
-            .map(|p| {
-                let (a, b) = (
-                    &model.colliders()[p.a.index()],
-                    &model.colliders()[p.b.index()],
-                );
-                format!("{}/{}", a.name, b.name)
+        let colliders = model.colliders().iter().map(|c| c.name.clone()).collect();
+        let sides = (model.colliders().iter())
+            .map(|c| match c.body {
+                Some(b) => (model.bodies()[b.index()].name.clone(), true),
+                None => ("world".to_owned(), false),
             })
             .collect();
-        let sides = (model.pairs().iter())
-            .map(|p| (side(p.a), side(p.b)))
-            .collect();
-        LedgerNames { pairs, sides }
+        LedgerNames { colliders, sides }
+    }
+
+    /// The colliders `(a, b)` of `pair`: `a` on a body, as in [`Model::pair`].
+    fn sides_of(&self, pair: PairId) -> (usize, usize) {
+        let (i, j) = pair
+            .colliders(self.colliders.len())
+            .map_or((0, 0), |(i, j)| (i.index(), j.index()));
+        if self.sides.get(i).is_some_and(|s| s.1) {
+            (i, j)
+        } else {
+            (j, i)
+        }
+    }
+
+    /// The name `<collider a>/<collider b>` of `pair`.
+    pub fn pair(&self, pair: PairId) -> String {
+        let (a, b) = self.sides_of(pair);
+        let name = |c: usize| self.colliders.get(c).map_or("?", String::as_str);
+        format!("{}/{}", name(a), name(b))
+    }
+
+    /// The bodies of the two sides of `pair` (`world` for an obstacle).
+    pub fn bodies(&self, pair: PairId) -> (String, String) {
+        let (a, b) = self.sides_of(pair);
+        let side = |c: usize| self.sides.get(c).map_or("?", |s| s.0.as_str()).to_owned();
+        (side(a), side(b))
     }
 
     /// The ledger entry (`/impacts` record) of the impact `ev`: the law's outcome, the
     /// frame, the energies; `alpha` absent when it is not finite (no approach speed).
     pub fn entry(&self, ev: &ImpactEvent) -> ImpactRecord {
-        let k = ev.frame.pair.index();
         let (out, c) = (&ev.outcome, &ev.outcome.coefficients);
+        let (body_a, body_b) = self.bodies(ev.frame.pair);
         ImpactRecord {
             t: ev.t,
-            pair: self.pairs[k].clone(),
-            body_a: self.sides[k].0.clone(),
-            body_b: self.sides[k].1.clone(),
+            pair: self.pair(ev.frame.pair),
+            body_a,
+            body_b,
             law: out.law,
             impact_type: out.kind,
             case: out.case.number(),
@@ -408,6 +424,13 @@ impl<W: Write + Seek + Send + 'static> Observer for RunLogger<W> {
         rec.u.clear();
         rec.u.extend_from_slice(s.u);
         rec.energy = Energy::new(s.energy.kinetic, s.energy.potential);
+        if self.listed != s.pairs {
+            self.listed.clear();
+            self.listed.extend_from_slice(s.pairs);
+            rec.contacts = (s.pairs.iter())
+                .map(|&p| ContactState::new(self.names.pair(p), ContactMode::Free, 0.0))
+                .collect();
+        }
         for (((c, &gap), mode), &slip) in (rec.contacts.iter_mut())
             .zip(s.gaps)
             .zip(s.modes)

@@ -3,11 +3,12 @@
 
 use crate::math::Vec2;
 
+use super::pairs::{PairRules, default_touch};
 use super::speeds::choose_speeds;
 use super::validate::validate;
 use super::{
-    Body, BodyId, Collider, ColliderId, Constraint, ContactPair, Coordinate, Joint, JointId,
-    JointKind, Material, Model, ModelError,
+    Body, BodyId, Collider, ColliderId, Constraint, Coordinate, Joint, JointId, JointKind,
+    Material, Model, ModelError,
 };
 
 /// How a pair of colliders is treated, beyond the default rule.
@@ -147,7 +148,7 @@ impl ModelBuilder {
             }
         }
         validate(&self.bodies, &self.joints, &self.colliders, self.gravity)?;
-        let pairs = self.contact_pairs()?;
+        let pairs = self.pair_rules()?;
         let (coordinates, joint_q) = coordinates(&self.joints);
         let speeds = choose_speeds(
             &self.bodies,
@@ -175,12 +176,11 @@ impl ModelBuilder {
         })
     }
 
-    /// The default pairs, then the rules in order (the last rule on a pair wins). The
-    /// rules are sorted by pair and walked alongside the pairs, which are listed in the
-    /// order of their smaller, then their larger collider index (no `n × n` table: a
-    /// 4,000-link chain has 8 million pairs).
-    fn contact_pairs(&self) -> Result<Vec<ContactPair>, ModelError> {
-        let n = self.colliders.len();
+    /// The contact rules: the default rule and material, and the builder's rules sorted by
+    /// pair (stable: the last rule on a pair wins). No pair is listed (a 4,000-link chain
+    /// has 8 million); the materials are checked as if they were, and the first bad one in
+    /// pair order is the error.
+    fn pair_rules(&self) -> Result<PairRules, ModelError> {
         // (smaller, larger) → the last rule's material (None: disabled), in pair order.
         let mut rules: Vec<((usize, usize), Option<Material>)> =
             Vec::with_capacity(self.rules.len());
@@ -204,48 +204,53 @@ impl ModelBuilder {
                 _ => last.push(r),
             }
         }
-        let mut next_rule = last.iter().peekable();
-        let mut pairs = Vec::new();
-        for i in 0..n {
-            for j in i + 1..n {
-                let material = match next_rule.peek() {
-                    Some(&&(key, m)) if key == (i, j) => {
-                        next_rule.next();
-                        m
+        let rules = PairRules {
+            default: self.default_material,
+            overrides: last,
+        };
+        self.check_materials(&rules)?;
+        Ok(rules)
+    }
+
+    /// The first pair, in pair order, whose material is not valid: among the overrides,
+    /// and the first pair of the default rule if the default material is not valid.
+    fn check_materials(&self, rules: &PairRules) -> Result<(), ModelError> {
+        let check = |(i, j): (usize, usize), m: &Material| {
+            let p = PairRules::contact_pair(&self.colliders, i, j, *m);
+            super::validate::check_material(
+                &self.colliders[p.a.0].name,
+                &self.colliders[p.b.0].name,
+                m,
+            )
+        };
+        let bad_override = (rules.overrides.iter())
+            .find(|(key, m)| m.as_ref().is_some_and(|m| check(*key, m).is_err()))
+            .map(|&(key, _)| key);
+        let mut bad = bad_override;
+        if super::validate::check_material("", "", &self.default_material).is_err() {
+            // The first couple that the default rule lets touch, before `bad_override`.
+            let n = self.colliders.len();
+            'scan: for i in 0..n {
+                for j in i + 1..n {
+                    if bad_override.is_some_and(|b| b <= (i, j)) {
+                        break 'scan;
                     }
-                    _ => self.default_touch(i, j).then_some(self.default_material),
-                };
-                if let Some(material) = material {
-                    // `a` on a body; `b` on a body or the world.
-                    let (a, b) = if self.colliders[i].body.is_some() {
-                        (i, j)
-                    } else {
-                        (j, i)
-                    };
-                    super::validate::check_material(
-                        &self.colliders[a].name,
-                        &self.colliders[b].name,
-                        &material,
-                    )?;
-                    pairs.push(ContactPair {
-                        a: ColliderId(a),
-                        b: ColliderId(b),
-                        material,
-                    });
+                    let overridden = (rules.overrides)
+                        .binary_search_by_key(&(i, j), |r| r.0)
+                        .is_ok();
+                    if !overridden && default_touch(&self.colliders, &self.joints, i, j) {
+                        bad = Some((i, j));
+                        break 'scan;
+                    }
                 }
             }
         }
-        Ok(pairs)
-    }
-
-    /// The default rule: different bodies (or a body and the world), not parent and child.
-    fn default_touch(&self, i: usize, j: usize) -> bool {
-        match (self.colliders[i].body, self.colliders[j].body) {
-            (None, None) => false,
-            (Some(_), None) | (None, Some(_)) => true,
-            (Some(a), Some(b)) => {
-                a != b && self.joints[a.0].parent != Some(b) && self.joints[b.0].parent != Some(a)
+        match bad {
+            Some(key) => {
+                let m = rules.material(&self.colliders, &self.joints, key.0, key.1);
+                check(key, &m.unwrap_or(self.default_material))
             }
+            None => Ok(()),
         }
     }
 

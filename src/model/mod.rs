@@ -32,6 +32,7 @@ mod collider;
 mod constraint;
 mod error;
 mod joint;
+mod pairs;
 pub mod spatial;
 mod speeds;
 mod validate;
@@ -57,7 +58,9 @@ pub struct JointId(pub(crate) usize);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ColliderId(pub(crate) usize);
 
-/// Index of a contact pair of a [`Model`].
+/// A contact pair of a [`Model`], derived from its two collider indices `i < j`
+/// (`i · 2³² + j`: stable, in the order of `i`, then `j`; see [`Model::pair_between`]).
+/// The model answers for any pair on demand; it lists none.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct PairId(pub(crate) usize);
 
@@ -79,6 +82,14 @@ impl BodyId {
     #[inline]
     pub fn joint(self) -> JointId {
         JointId(self.0)
+    }
+}
+
+impl PairId {
+    /// The two colliders `(i, j)`, `i < j`, of the pair among `ncolliders` colliders (the
+    /// inverse of its definition); `None` beyond the last couple.
+    pub fn colliders(self, ncolliders: usize) -> Option<(ColliderId, ColliderId)> {
+        pairs::decode(ncolliders, self.0).map(|(i, j)| (ColliderId(i), ColliderId(j)))
     }
 }
 
@@ -109,7 +120,8 @@ pub struct Model {
     bodies: Vec<Body>,
     joints: Vec<Joint>,
     colliders: Vec<Collider>,
-    pairs: Vec<ContactPair>,
+    /// The contact rules (no list of pairs: see `pairs.rs`).
+    pairs: pairs::PairRules,
     gravity: Vec2,
     coordinates: Vec<Coordinate>,
     /// For each joint, the index in `q` of its first coordinate; `None` if prescribed or
@@ -232,10 +244,22 @@ impl Model {
         &self.colliders
     }
 
-    /// The contact pairs.
-    #[inline]
-    pub fn pairs(&self) -> &[ContactPair] {
-        &self.pairs
+    /// The contact pairs that may touch, in pair order, computed one by one from the rules
+    /// (nothing is stored: a 4,000-link chain has 8 million; `O(n²)` to walk them all).
+    pub fn pairs(&self) -> impl Iterator<Item = ContactPair> + '_ {
+        let (n, colliders) = (self.colliders.len(), &self.colliders);
+        (0..n).flat_map(move |i| {
+            (i + 1..n).filter_map(move |j| {
+                let material = self.pairs.material(colliders, &self.joints, i, j)?;
+                Some(pairs::PairRules::contact_pair(colliders, i, j, material))
+            })
+        })
+    }
+
+    /// The number of pairs that may touch, counted without storing them (`O(n²)` time for
+    /// `n` colliders, `O(1)` memory).
+    pub fn pair_count(&self) -> usize {
+        self.pairs.count(&self.colliders, &self.joints)
     }
 
     /// Gravitational acceleration `g` (m/s², world frame).
@@ -268,21 +292,41 @@ impl Model {
         self.colliders.get(id.0)
     }
 
-    /// The contact pair `id`, if it exists.
-    #[inline]
-    pub fn pair(&self, id: PairId) -> Option<&ContactPair> {
-        self.pairs.get(id.0)
+    /// The contact pair `id`, if its colliders may touch.
+    pub fn pair(&self, id: PairId) -> Option<ContactPair> {
+        let n = self.colliders.len();
+        let (i, j) = pairs::decode(n, id.0)?;
+        let material = self.pairs.material(&self.colliders, &self.joints, i, j)?;
+        Some(pairs::PairRules::contact_pair(
+            &self.colliders,
+            i,
+            j,
+            material,
+        ))
     }
 
-    /// The pair of the colliders `x` and `y` (in either order), if they may touch: a binary
-    /// search of the pairs, which the builder lists in the order of their smaller, then
-    /// their larger collider index.
+    /// The contact pair `id` of a pair the model gave out ([`Model::pair_between`],
+    /// [`Model::pair_ids`], the broad phase): its colliders decoded from the id and its
+    /// material. An id of colliders that may not touch gets the default material; an id
+    /// beyond the last couple, the colliders 0 and 1 (neither happens in the loop).
+    pub fn pair_of(&self, id: PairId) -> ContactPair {
+        let n = self.colliders.len();
+        let (i, j) = pairs::decode(n, id.0).unwrap_or((0, 1));
+        let material = (self.pairs)
+            .material(&self.colliders, &self.joints, i, j)
+            .unwrap_or(self.pairs.default);
+        pairs::PairRules::contact_pair(&self.colliders, i, j, material)
+    }
+
+    /// The pair of the colliders `x` and `y` (in either order), if they may touch: its id
+    /// from the two collider indices, after the rules (`O(log r)` for `r` pair rules).
     pub fn pair_between(&self, x: ColliderId, y: ColliderId) -> Option<PairId> {
-        let key = (x.0.min(y.0), x.0.max(y.0));
-        self.pairs
-            .binary_search_by_key(&key, |p| (p.a.0.min(p.b.0), p.a.0.max(p.b.0)))
-            .ok()
-            .map(PairId)
+        let (i, j) = (x.0.min(y.0), x.0.max(y.0));
+        let n = self.colliders.len();
+        if i == j || j >= n {
+            return None;
+        }
+        (self.pairs.material(&self.colliders, &self.joints, i, j)).map(|_| pairs::encode(n, i, j))
     }
 
     /// Index in `q` of the first coordinate of joint `id`; `None` for a prescribed or fixed
@@ -297,9 +341,19 @@ impl Model {
         (0..self.bodies.len()).map(BodyId)
     }
 
-    /// All pair ids.
-    pub fn pair_ids(&self) -> impl Iterator<Item = PairId> + use<> {
-        (0..self.pairs.len()).map(PairId)
+    /// The ids of the pairs that may touch, in pair order, found one by one from the rules
+    /// (`O(n²)` to walk them all, nothing stored).
+    pub fn pair_ids(&self) -> impl Iterator<Item = PairId> + '_ {
+        let n = self.colliders.len();
+        (0..n).flat_map(move |i| {
+            (i + 1..n)
+                .filter(move |&j| {
+                    (self.pairs)
+                        .material(&self.colliders, &self.joints, i, j)
+                        .is_some()
+                })
+                .map(move |j| pairs::encode(n, i, j))
+        })
     }
 
     /// All collider ids.

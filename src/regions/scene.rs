@@ -36,7 +36,7 @@ impl SceneContact {
 
 /// The name of a pair, `a/b` (its colliders' names, as in the impact table of `ricochet run`).
 pub fn pair_name(model: &Model, pair: PairId) -> String {
-    let p = &model.pairs()[pair.index()];
+    let p = &model.pair_of(pair);
     let name = |c: ColliderId| model.colliders()[c.index()].name.as_str();
     format!("{}/{}", name(p.a), name(p.b))
 }
@@ -53,22 +53,23 @@ pub fn scene_contact(
     pair: Option<&str>,
 ) -> Result<SceneContact, SimError> {
     let (t, q, u) = (state.t, state.q.as_slice(), state.u.as_slice());
-    let names: Vec<String> = model.pair_ids().map(|id| pair_name(model, id)).collect();
-    let chosen =
-        |id: PairId| pair.is_none_or(|p| p == names[id.index()] || p.parse() == Ok(id.index()));
+    // The pairs in order: `pair` names one, or gives its rank among them from 0.
+    let ids: Vec<PairId> = model.pair_ids().collect();
+    let names: Vec<String> = ids.iter().map(|&id| pair_name(model, id)).collect();
+    let chosen = |k: usize| pair.is_none_or(|p| p == names[k] || p.parse() == Ok(k));
     let mut data = Data::new(model);
     update_positions(model, &mut data, t, q).map_err(|e| SimError::at(t, e))?;
-    let mut best: Option<(PairId, PairContact)> = None;
-    for id in model.pair_ids().filter(|&id| chosen(id)) {
+    let mut best: Option<(usize, PairContact)> = None;
+    for k in (0..ids.len()).filter(|&k| chosen(k)) {
         let contact =
-            pair_contact(model, &data, id, Real::INFINITY).map_err(|e| SimError::at(t, e))?;
+            pair_contact(model, &data, ids[k], Real::INFINITY).map_err(|e| SimError::at(t, e))?;
         if let Some(c) = contact
             && best.is_none_or(|(_, b)| c.gap < b.gap)
         {
-            best = Some((id, c));
+            best = Some((k, c));
         }
     }
-    let Some((id, contact)) = best else {
+    let Some((k, contact)) = best else {
         let message = match pair {
             None => "the scene has no contact pair".to_owned(),
             Some(p) => format!(
@@ -82,13 +83,14 @@ pub fn scene_contact(
         };
         return Err(SimError::Contact { t, message });
     };
+    let id = ids[k];
     let (frame, w) = ImpactMap::new(model).impact_matrix(model, (id, contact), t, q, u)?;
     Ok(SceneContact {
         pair: id,
-        name: names[id.index()].clone(),
+        name: names[k].clone(),
         gap: contact.gap,
         w,
         v: ContactVelocity::new(frame.v_n(), frame.v_t()),
-        material: model.pairs()[id.index()].material,
+        material: model.pair_of(id).material,
     })
 }

@@ -157,7 +157,7 @@ pub(super) fn build(
         }
         _ => locate_model_error(e, &file, loc),
     })?;
-    if let (None, Some(pair)) = (&file.contact, model.pairs().first()) {
+    if let (None, Some(pair)) = (&file.contact, model.pairs().next()) {
         return Err(loc.at(
             collider_spans[pair.a.index()].clone(),
             "the scene has contact pairs but no [contact] table: give at least `e` and `mu`",
@@ -791,13 +791,29 @@ fn overlaps(model: &Model, data: &Data, tolerance: Real) -> Result<(), (usize, S
     let boxes = broad::collider_boxes(model, data, |_| 0.0).map_err(|e| (0, e.to_string()))?;
     let mut tested = broad::overlapping_pairs(model, &boxes);
     let kind = |c: crate::model::ColliderId| model.colliders()[c.index()].shape.shape_type();
-    let mut combinations = HashMap::new();
-    for id in model.pair_ids() {
-        if let Some(p) = model.pair(id) {
-            combinations.entry((kind(p.a), kind(p.b))).or_insert(id);
+    // The first pair of each combination, in pair order; the walk stops once every
+    // combination that can occur (a shape type on a body with any shape type) is found.
+    let types = |on_body: bool| {
+        let mut t: Vec<_> = (model.colliders().iter())
+            .filter(|c| !on_body || c.body.is_some())
+            .map(|c| c.shape.shape_type())
+            .collect();
+        t.sort_by_key(|k| *k as u32);
+        t.dedup();
+        t.len()
+    };
+    let possible = types(true) * types(false);
+    let mut combinations = Vec::new();
+    for p in model.pairs() {
+        let key = (kind(p.a), kind(p.b));
+        if !combinations.iter().any(|(k, _)| *k == key) {
+            combinations.extend(model.pair_between(p.a, p.b).map(|id| (key, id)));
+            if combinations.len() >= possible {
+                break;
+            }
         }
     }
-    tested.extend(combinations.into_values());
+    tested.extend(combinations.into_iter().map(|(_, id)| id));
     tested.sort_unstable();
     tested.dedup();
     for id in tested {

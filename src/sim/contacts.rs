@@ -268,8 +268,7 @@ impl Simulation<'_> {
 
     /// The material of a pair, after the overrides.
     fn material(&self, pair: PairId) -> Material {
-        self.overrides
-            .apply(self.model.pairs()[pair.index()].material)
+        self.overrides.apply(self.model.pair_of(pair).material)
     }
 
     /// Every contact point within the closed-contact tolerance at `(t, y)`, with its
@@ -281,8 +280,9 @@ impl Simulation<'_> {
         update_velocities(self.model, &mut self.sampler, u).map_err(|e| e.at(t))?;
         let mut ws = ManifoldWorkspace::default();
         let mut out = Vec::new();
-        for k in 0..self.model.pairs().len() {
-            let pair = PairId(k);
+        // The pairs within the tolerance of contact are among those whose boxes, grown by
+        // it, overlap (the broad phase).
+        for pair in self.near_pairs(t, self.scales.gap_tol)? {
             for (contact, local) in pair_points(
                 self.model,
                 &self.sampler,
@@ -961,9 +961,18 @@ impl Simulation<'_> {
         let mu: Vec<Real> = closed.iter().map(|c| self.material(c.pair).mu).collect();
         self.system.persistent.set(closed.clone(), mu.clone());
         self.gaps.persistent.set(closed, mu);
-        let npairs = self.model.pairs().len();
-        for k in 0..npairs {
-            let pair = PairId(k);
+        // The pairs whose mode may change: closed now, not free before, pending or
+        // accumulating (every other pair stays free).
+        let mut pairs: Vec<PairId> = (self.gaps.persistent.closed().iter())
+            .map(|c| c.pair)
+            .chain(self.modes.changed())
+            .chain(self.passages.iter().map(|p| p.pair))
+            .chain(self.accumulating.stored())
+            .collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        for pair in pairs {
+            let k = pair.index();
             let holds = self
                 .gaps
                 .persistent

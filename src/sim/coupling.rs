@@ -48,7 +48,7 @@ impl Coupling {
     /// The coupling roots of the two bodies of `pair` (`None` for an obstacle or a body
     /// without a free coordinate on its path).
     fn roots(&self, model: &Model, pair: PairId) -> [Option<usize>; 2] {
-        let p = &model.pairs()[pair.index()];
+        let p = &model.pair_of(pair);
         let root = |c: crate::model::ColliderId| {
             model.colliders()[c.index()]
                 .body

@@ -89,7 +89,7 @@ pub enum SimError {
     Impact {
         /// Time (s).
         t: Real,
-        /// The contact pair.
+        /// The contact pair (its [`PairId::index`](crate::model::PairId::index)).
         pair: usize,
         /// Its name, `<collider a>/<collider b>`.
         name: String,

@@ -14,7 +14,10 @@ use crate::state::Data;
 /// Event functions per contact pair.
 pub const SLOTS: usize = 7;
 
-/// The slot of an event function: for pair `k`, slot `SLOTS·k + s`.
+/// The slot of an event function among every pair's: for pair `k`, slot `SLOTS·k + s`
+/// (the index of the events the contact stage receives). The locator samples the
+/// functions of the candidate pairs alone (the broad phase, `sim::broad`): the pair of
+/// rank `r` among them has the slots `SLOTS·r + s` there ([`GapFunctions::slot_of`]).
 ///
 /// | s | function | armed when | its event |
 /// |---|---|---|---|
@@ -48,6 +51,9 @@ pub struct GapFunctions<'m> {
     pub persistent: Persistent,
     scratch: PointScratch,
     scales: Scales,
+    /// The candidate pairs of the step, in pair order: the pairs whose functions are
+    /// evaluated (see [`slot`]).
+    pub candidates: Vec<PairId>,
 }
 
 impl<'m> GapFunctions<'m> {
@@ -59,6 +65,32 @@ impl<'m> GapFunctions<'m> {
             persistent: Persistent::new(model, scales),
             scratch: PointScratch::new(model),
             scales,
+            candidates: Vec::new(),
+        }
+    }
+
+    /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
+    pub fn slot_of(&self, pair: PairId, s: usize) -> Option<usize> {
+        let r = self.candidates.binary_search(&pair).ok()?;
+        Some(SLOTS * r + s)
+    }
+
+    /// The slot among every pair's ([`slot`]) of the candidates' slot `i`.
+    pub fn global_slot(&self, i: usize) -> usize {
+        slot(self.candidates[i / SLOTS], i % SLOTS)
+    }
+
+    /// Adds `pairs` to the candidates (kept in pair order, once each).
+    pub fn add_candidates(&mut self, pairs: impl Iterator<Item = PairId>) {
+        let before = self.candidates.len();
+        for pair in pairs {
+            if self.candidates.binary_search(&pair).is_err() {
+                self.candidates.push(pair);
+            }
+        }
+        if self.candidates.len() > before {
+            self.candidates.sort_unstable();
+            self.candidates.dedup();
         }
     }
 }
@@ -70,6 +102,18 @@ impl GapFunctions<'_> {
         let n = self.model.nq();
         update_positions(self.model, &mut self.data, t, &y[..n])
             .map_err(|e| Nested::from(e.at(t)))?;
+        self.open_gap_here(pair, t)
+    }
+
+    /// The positions at `(t, y)`, for [`Self::open_gap_at_positions`] (one kinematics pass
+    /// for the gaps of many pairs).
+    pub fn set_positions(&mut self, t: Real, y: &[Real]) -> Result<(), Nested> {
+        let n = self.model.nq();
+        update_positions(self.model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))
+    }
+
+    /// [`Self::open_gap`] at the positions of the last [`Self::set_positions`] (at `t`).
+    pub fn open_gap_at_positions(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
         self.open_gap_here(pair, t)
     }
 
@@ -122,21 +166,23 @@ impl EventFunctions for GapFunctions<'_> {
             self.persistent
                 .accelerate(model, &mut self.data, (t, q, u))?;
         }
-        for k in 0..model.pairs().len() {
-            let pair = PairId(k);
-            g[slot(pair, 0)] = self.open_gap_here(pair, t)?;
+        for r in 0..self.candidates.len() {
+            g[SLOTS * r] = self.open_gap_here(self.candidates[r], t)?;
         }
         for i in 0..self.persistent.closed().len() {
             let c = self.persistent.closed()[i];
             let j = rank(&self.persistent, i);
+            let Some(at) = self.slot_of(c.pair, 0) else {
+                continue;
+            };
             let (lambda_n, lambda_t) = self.persistent.force(i);
             let mu = self.persistent.mu(i);
-            g[slot(c.pair, 1 + 3 * j)] = lambda_n;
-            g[slot(c.pair, 2 + 3 * j)] = match c.hold {
+            g[at + 1 + 3 * j] = lambda_n;
+            g[at + 2 + 3 * j] = match c.hold {
                 Hold::Stick => mu * lambda_n - lambda_t.abs(),
                 Hold::Slide(s) => s * self.persistent.points()[i].v_t + c.slip_margin,
             };
-            g[slot(c.pair, 3 + 3 * j)] = self.persistent.painleve(i).min(self.scales.length);
+            g[at + 3 + 3 * j] = self.persistent.painleve(i).min(self.scales.length);
         }
         Ok(())
     }
@@ -157,8 +203,8 @@ impl EventFunctions for GapFunctions<'_> {
         update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
         update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
         g_dot.fill(0.0);
-        for k in 0..model.pairs().len() {
-            let pair = PairId(k);
+        for r in 0..self.candidates.len() {
+            let pair = self.candidates[r];
             let closed = self.persistent.closed();
             let mut on_pair = closed.iter().filter(|c| c.pair == pair);
             let contact = match (on_pair.next().map(|c| c.local), on_pair.next()) {
@@ -167,9 +213,9 @@ impl EventFunctions for GapFunctions<'_> {
                 (Some(local), None) => self.other_point(pair, local)?,
                 (Some(_), Some(_)) => None,
             };
-            g_dot[slot(pair, 0)] = match contact {
+            g_dot[SLOTS * r] = match contact {
                 Some(c) => {
-                    let p = &model.pairs()[k];
+                    let p = model.pair_of(pair);
                     let v = |collider: crate::model::ColliderId, at: Vec2| match model.colliders()
                         [collider.index()]
                     .body

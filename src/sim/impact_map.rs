@@ -728,7 +728,7 @@ struct PointSet {
 
 /// The name of a contact pair, `<collider a>/<collider b>`.
 pub fn pair_name(model: &Model, pair: PairId) -> String {
-    let p = &model.pairs()[pair.index()];
+    let p = &model.pair_of(pair);
     let name = |c: crate::model::ColliderId| &model.colliders()[c.index()].name;
     format!("{}/{}", name(p.a), name(p.b))
 }

@@ -20,6 +20,7 @@
 //! and the Painlevé coefficient.
 
 mod accumulation;
+mod broad;
 mod contacts;
 mod coupling;
 mod error;
@@ -27,6 +28,7 @@ pub mod gaps;
 mod impact_map;
 mod moreau_jean;
 mod observer;
+mod pair_map;
 mod persistent;
 mod summary;
 mod system;
@@ -41,6 +43,7 @@ pub use moreau_jean::{MoreauJean, MoreauJeanSettings, SolverReport};
 pub use observer::{
     Level, NullObserver, Observer, ObserverError, PairMode, Recorder, Sample, Transition,
 };
+pub use pair_map::PairMap;
 pub use persistent::{Closed, Hold};
 pub use summary::{EnergyAudit, RunCounters, RunSummary};
 pub use system::MotionSystem;
@@ -54,6 +57,10 @@ use crate::model::{Model, PairId};
 use crate::settings::Settings;
 use crate::state::{Data, State};
 use accumulation::Guard;
+
+/// The samples of a model with at most this many pairs list every pair; beyond, the pairs
+/// near contact (see `Simulation::list_pairs`).
+pub const LISTED_PAIRS: usize = 1000;
 
 /// A simulation of one model with its settings; [`Simulation::run`] runs it.
 pub struct Simulation<'m> {
@@ -70,21 +77,32 @@ pub struct Simulation<'m> {
     coupling: coupling::Coupling,
     /// Scratch for samples.
     sampler: Data,
-    /// Armed event functions (see [`gaps::slot`]).
+    /// Armed event functions of the candidate pairs (see [`gaps::slot`]).
     armed: Vec<bool>,
     /// Pairs whose gap event is disarmed after a spurious crossing (rounding noise just
     /// after an impact), until they are clearly open.
-    disarmed: Vec<bool>,
+    disarmed: PairMap<bool>,
     /// The mode of each pair, for the samples.
-    modes: Vec<PairMode>,
+    modes: PairMap<PairMode>,
     /// The slip direction of each pair, for the samples (see [`Sample::slips`]).
-    slips: Vec<i8>,
+    slips: PairMap<i8>,
     /// The last instant of impacts on each pair and the fastest separation of its points
     /// then `(t, v_n)`: the last hop, for the ratio and duration of an accumulation.
-    last_separation: Vec<Option<(Real, Real)>>,
+    last_separation: PairMap<Option<(Real, Real)>>,
     /// The pairs whose accumulation of impacts ended at the current instant, until the
     /// mode selection reports them.
-    accumulating: Vec<Option<contacts::Accumulation>>,
+    accumulating: PairMap<Option<contacts::Accumulation>>,
+    /// The bounding boxes of the colliders for the broad phase (see [`broad`]).
+    boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
+    /// Every pair, when the model has at most [`LISTED_PAIRS`] (the samples list them all).
+    all_pairs: Option<Vec<PairId>>,
+    /// Without the broad phase, every pair of the model: each step samples them all (the
+    /// oracle of the tests; see [`Self::set_broad_phase`]).
+    every_pair: Option<Vec<PairId>>,
+    /// The pairs the current sample lists, and their gaps, modes and slips.
+    listed: Vec<PairId>,
+    listed_modes: Vec<PairMode>,
+    listed_slips: Vec<i8>,
     /// Changes of mode to report later: passages to persistent contact stamped at the
     /// extrapolated end `t∞` of an accumulation (the samples before it show the old mode).
     passages: Vec<contacts::Passage>,
@@ -123,7 +141,7 @@ impl<'m> Simulation<'m> {
         let scales = Scales::of(model, &settings.integrator);
         let system = MotionSystem::new(model, scales);
         let n = crate::integrate::OdeSystem::dim(&system);
-        let npairs = model.pairs().len();
+        let all_pairs = broad::all_pairs_if_few(model);
         let mut stepper = AnyStepper::new(n, &settings.integrator)?;
         // A step below 10 ε t_end cannot bring the run to its end: it is lost in the
         // rounding of any time near t_end. (The floor 10 ε |t| alone is 0 at t = 0, where a
@@ -135,18 +153,24 @@ impl<'m> Simulation<'m> {
             overrides,
             scales,
             stepper,
-            locator: EventLocator::new(n, gaps::SLOTS * npairs, LocatorSettings::default()),
+            locator: EventLocator::new(n, 0, LocatorSettings::default()),
             system,
             gaps: GapFunctions::new(model, scales),
             map: ImpactMap::new(model).with_still(scales.v_drift),
             coupling: coupling::Coupling::new(model),
             sampler: Data::new(model),
-            armed: vec![false; gaps::SLOTS * npairs],
-            disarmed: vec![false; npairs],
-            modes: vec![PairMode::Free; npairs],
-            slips: vec![0; npairs],
-            last_separation: vec![None; npairs],
-            accumulating: vec![None; npairs],
+            armed: Vec::new(),
+            disarmed: PairMap::new(false),
+            modes: PairMap::new(PairMode::Free),
+            slips: PairMap::new(0),
+            last_separation: PairMap::new(None),
+            accumulating: PairMap::new(None),
+            boxes: Vec::new(),
+            all_pairs,
+            every_pair: None,
+            listed: Vec::new(),
+            listed_modes: Vec::new(),
+            listed_slips: Vec::new(),
             passages: Vec::new(),
             guard: Guard::new(),
             h_max_base: settings.integrator.h_max,
@@ -154,12 +178,19 @@ impl<'m> Simulation<'m> {
             indeterminate: (Real::NEG_INFINITY, 0),
             slip_starts: (Real::NEG_INFINITY, Vec::new()),
             y: vec![0.0; n],
-            gap_values: vec![0.0; npairs],
+            gap_values: Vec::new(),
             next_output: 0,
             audit: EnergyAudit::default(),
             counters: RunCounters::default(),
             last_sample_t: None,
         })
+    }
+
+    /// Turns the broad phase off (`false`: every step samples the event functions of every
+    /// pair, `O(n²)`, as before it existed) or on again (the default). With it off the
+    /// runs must be the same bit for bit: the oracle of `tests/broad_phase.rs`.
+    pub fn set_broad_phase(&mut self, on: bool) {
+        self.every_pair = (!on).then(|| self.model.pair_ids().collect());
     }
 
     /// The scales used for tolerances (length, resting speed).
@@ -205,8 +236,10 @@ impl<'m> Simulation<'m> {
             if t >= t_end {
                 return Ok(StopReason::EndTime);
             }
+            self.broad_before_step()?;
             self.cap_for_spin()?;
             self.stepper.step(&mut self.system, t_end)?;
+            self.broad_after_step()?;
             let Some(found) = self.locate()? else {
                 // The closed contacts have no forces from some instant inside the step on
                 // (a mode that stops being consistent): the run is now just before it;
@@ -225,6 +258,11 @@ impl<'m> Simulation<'m> {
                 Some(event) => {
                     self.counters.events += 1;
                     self.settle(&event)?;
+                    // The event with its slot among every pair's (`SLOTS · pair + s`).
+                    let event = Event {
+                        index: self.gaps.global_slot(event.index),
+                        ..event
+                    };
                     if let Some(reason) = self.guard.after_event(self.stepper.t()) {
                         return Ok(self.stall(
                             self.stepper.t(),
@@ -286,16 +324,16 @@ impl<'m> Simulation<'m> {
     /// is armed again once that gap exceeds the closed-contact tolerance; then the step cap
     /// is lifted.
     fn rearm(&mut self, t: Real) -> Result<(), SimError> {
-        if !self.disarmed.iter().any(|&d| d) {
+        let disarmed: Vec<PairId> = self.disarmed.changed().collect();
+        if disarmed.is_empty() {
             return Ok(());
         }
-        for k in 0..self.disarmed.len() {
-            if self.disarmed[k] {
-                let gap = self.gaps.open_gap(PairId(k), t, self.stepper.y())?;
-                self.disarmed[k] = gap <= self.scales.gap_tol;
-            }
+        for pair in disarmed {
+            let gap = self.gaps.open_gap(pair, t, self.stepper.y())?;
+            self.disarmed[pair.index()] = gap <= self.scales.gap_tol;
         }
-        if !self.disarmed.iter().any(|&d| d) {
+        self.disarmed.prune();
+        if self.disarmed.changed().next().is_none() {
             self.h_max_base = self.settings.integrator.h_max;
         }
         self.arm();
@@ -303,19 +341,115 @@ impl<'m> Simulation<'m> {
     }
 
     /// Arms the event functions of the current contact modes (see [`gaps::slot`]).
+    /// The pairs with a closed point and those whose gap event is disarmed join the
+    /// candidates first (see [`broad`]).
     fn arm(&mut self) {
-        self.armed.fill(false);
         let closed = self.system.persistent.closed();
-        for k in 0..self.disarmed.len() {
-            let on_pair = closed.iter().filter(|c| c.pair.index() == k).count();
-            self.armed[gaps::SLOTS * k] = on_pair < 2 && !self.disarmed[k];
+        let always = (closed.iter().map(|c| c.pair)).chain(self.disarmed.changed());
+        self.gaps.add_candidates(always);
+        let candidates = &self.gaps.candidates;
+        self.armed.clear();
+        self.armed.resize(gaps::SLOTS * candidates.len(), false);
+        self.locator.set_len(self.armed.len());
+        for (r, &pair) in candidates.iter().enumerate() {
+            let on_pair = closed.iter().filter(|c| c.pair == pair).count();
+            self.armed[gaps::SLOTS * r] = on_pair < 2 && !self.disarmed[pair.index()];
         }
         for (i, c) in closed.iter().enumerate() {
             let j = gaps::rank(&self.system.persistent, i);
-            self.armed[gaps::slot(c.pair, 1 + 3 * j)] = true;
-            self.armed[gaps::slot(c.pair, 2 + 3 * j)] = true;
-            self.armed[gaps::slot(c.pair, 3 + 3 * j)] = matches!(c.hold, Hold::Slide(_));
+            let Some(slot) = self.gaps.slot_of(c.pair, 0) else {
+                continue;
+            };
+            self.armed[slot + 1 + 3 * j] = true;
+            self.armed[slot + 2 + 3 * j] = true;
+            self.armed[slot + 3 + 3 * j] = matches!(c.hold, Hold::Slide(_));
         }
+    }
+
+    /// Stage `broad` before the step: the candidates of the coming step for its cap,
+    /// from the boxes grown by what the colliders travel within the horizon
+    /// `H = min(h_max, 1.01 · 10 h_next)` from their speeds and gravity (see [`broad`]).
+    fn broad_before_step(&mut self) -> Result<(), SimError> {
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let t = self.stepper.t();
+        {
+            let y = self.stepper.y();
+            update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
+            update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
+        }
+        let h = self
+            .h_max_base
+            .min(1.01 * broad::GROWTH * self.stepper.h_next());
+        let (g, slack) = (self.model.gravity().length(), 10.0 * self.scales.gap_tol);
+        broad::grown_boxes(self.model, &self.sampler, &mut self.boxes, |v| {
+            v * h + 0.5 * g * h * h + slack
+        })
+        .map_err(|e| e.at(t))?;
+        self.gaps.candidates = match &self.every_pair {
+            Some(all) => all.clone(),
+            None => crate::contact::broad::overlapping_pairs(self.model, &self.boxes),
+        };
+        self.arm();
+        Ok(())
+    }
+
+    /// Stage `broad` after the step: the boxes before the step grown to hold the
+    /// colliders' boxes at the locator's sample times, each grown by what it travels in a
+    /// sample interval at its speed bound there; their overlapping pairs are the
+    /// candidates of the event location (see [`broad`]).
+    fn broad_after_step(&mut self) -> Result<(), SimError> {
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let (t0, t1) = (self.stepper.t_prev(), self.stepper.t());
+        let parts = self.locator_samples + 1;
+        let dt = (t1 - t0) / parts as Real;
+        let mut y = std::mem::take(&mut self.y);
+        let mut result = Ok(());
+        for j in 0..=parts {
+            let t = if j == parts {
+                t1
+            } else {
+                t0 + (t1 - t0) * (j as Real / parts as Real)
+            };
+            if j == parts {
+                y.copy_from_slice(self.stepper.y());
+            } else if j == 0 {
+                y.copy_from_slice(self.stepper.y_prev());
+            } else {
+                self.stepper.dense(t, &mut y);
+            }
+            result = update_positions(self.model, &mut self.sampler, t, &y[..n])
+                .and_then(|()| update_velocities(self.model, &mut self.sampler, &y[n..nqu]))
+                .and_then(|()| {
+                    broad::sweep_boxes(self.model, &self.sampler, &mut self.boxes, |v| v * dt)
+                })
+                .map_err(|e| e.at(t));
+            if result.is_err() {
+                break;
+            }
+        }
+        self.y = y;
+        result?;
+        self.gaps.candidates = match &self.every_pair {
+            Some(all) => all.clone(),
+            None => crate::contact::broad::overlapping_pairs(self.model, &self.boxes),
+        };
+        self.arm();
+        Ok(())
+    }
+
+    /// The pairs whose boxes, grown by `margin` (m), overlap at the positions of
+    /// `self.sampler`, in pair order: every pair within `margin` of contact.
+    /// Without the broad phase, every pair.
+    fn near_pairs(&mut self, t: Real, margin: Real) -> Result<Vec<PairId>, SimError> {
+        if let Some(all) = &self.every_pair {
+            return Ok(all.clone());
+        }
+        broad::grown_boxes(self.model, &self.sampler, &mut self.boxes, |_| margin)
+            .map_err(|e| e.at(t))?;
+        Ok(crate::contact::broad::overlapping_pairs(
+            self.model,
+            &self.boxes,
+        ))
     }
 
     /// Caps the next step so that the event location cannot miss a contact of a fast or
@@ -347,41 +481,23 @@ impl<'m> Simulation<'m> {
             update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
             update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
         }
-        let colliders = self.model.colliders();
-        // The speed bound of the points of a shape, its radius and its rotation rate. The
-        // bound holds as the body turns: the speed of its centre of mass plus |ω| times the
-        // farthest point's distance from it (the speed of the circle's centre alone changes
-        // by |ω| times its distance from the centre of mass within the step: drop 32460 of
-        // tests/spin_drops.rs, a sliver off its centre of mass, bounded at 32 m/s when it
-        // reached 61, stepped through a thin box).
-        let reach = |c: crate::model::ColliderId| {
-            let collider = &colliders[c.index()];
-            let sphere = collider.shape.compute_local_bounding_sphere();
-            let r = sphere.radius();
-            match collider.body {
-                None => (0.0, r, 0.0),
-                Some(b) => {
-                    let (pose, twist, com) = (
-                        self.sampler.body_pose[b.index()],
-                        self.sampler.body_twist[b.index()],
-                        self.sampler.body_com[b.index()],
-                    );
-                    let centre =
-                        pose.transform_point(collider.pose.transform_point(sphere.center()));
-                    let v_com = twist.v + crate::math::perp(com) * twist.w;
-                    let w = twist.w.abs();
-                    (v_com.length() + w * ((centre - com).length() + r), r, w)
-                }
-            }
-        };
         // Gravity speeds the bodies up within the step: the time to cover d from speed V
         // at |g| is 2d / (V + √(V² + 2|g|d)).
         let g = self.model.gravity().length();
-        for k in 0..self.model.pairs().len() {
-            if !self.armed[gaps::SLOTS * k] {
+        // One kinematics pass for the gaps of every pair below.
+        self.gaps
+            .set_positions(t, self.stepper.y())
+            .map_err(|e| SimError::Contact {
+                t,
+                message: format!("the positions for the gaps: {e}"),
+            })?;
+        for r in 0..self.gaps.candidates.len() {
+            if !self.armed[gaps::SLOTS * r] {
                 continue;
             }
-            let pair = self.model.pairs()[k];
+            let id = self.gaps.candidates[r];
+            let pair = self.model.pair_of(id);
+            let reach = |c| broad::reach(self.model, &self.sampler, c);
             let ((va, ra, wa), (vb, rb, wb)) = (reach(pair.a), reach(pair.b));
             let v = va + vb;
             if v.is_nan() || v <= 0.0 {
@@ -394,10 +510,10 @@ impl<'m> Simulation<'m> {
             }
             let d = self
                 .gaps
-                .open_gap(PairId(k), t, self.stepper.y())
+                .open_gap_at_positions(id, t)
                 .map_err(|e| SimError::Contact {
                     t,
-                    message: format!("the gap of pair #{k}: {e}"),
+                    message: format!("the gap of {}: {e}", impact_map::pair_name(self.model, id)),
                 })?;
             let reach_time = 2.0 * d / (v + (v * v + 2.0 * g * d.max(0.0)).sqrt());
             cap = cap.min(reach_time.max(fine));
@@ -497,26 +613,51 @@ impl<'m> Simulation<'m> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let (q, u) = (&y[..n], &y[n..nqu]);
         let e = energy(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
-        for (k, g) in self.gap_values.iter_mut().enumerate() {
-            *g = crate::contact::signed_gap(self.model, &self.sampler, PairId(k), Real::INFINITY)
+        self.list_pairs(t)?;
+        self.gap_values.clear();
+        for &pair in &self.listed {
+            let g = crate::contact::signed_gap(self.model, &self.sampler, pair, Real::INFINITY)
                 .map_err(|e| e.at(t))?
                 .unwrap_or(Real::INFINITY);
+            self.gap_values.push(g);
+        }
+        self.listed_modes.clear();
+        self.listed_slips.clear();
+        for pair in &self.listed {
+            self.listed_modes.push(self.modes[pair.index()]);
+            self.listed_slips.push(self.slips[pair.index()]);
         }
         let sample = Sample {
             t,
             q,
             u,
             energy: e,
+            pairs: &self.listed,
             gaps: &self.gap_values,
             poses: &self.sampler.body_pose,
             at_impact,
-            modes: &self.modes,
-            slips: &self.slips,
+            modes: &self.listed_modes,
+            slips: &self.listed_slips,
         };
         observer.sample(self.model, &sample).map_err(|e| e.at(t))?;
         self.counters.samples += 1;
         self.last_sample_t = Some(t);
         Ok(())
+    }
+
+    /// The pairs a sample lists, into `self.listed` (positions in `self.sampler`): every
+    /// pair when the model has at most [`LISTED_PAIRS`]; beyond, the pairs whose bounding
+    /// boxes overlap at the sample and every pair in contact (a mode other than free).
+    fn list_pairs(&mut self, t: Real) -> Result<(), SimError> {
+        broad::listed_pairs(
+            self.model,
+            &self.sampler,
+            self.all_pairs.as_deref(),
+            self.modes.changed(),
+            &mut self.boxes,
+            &mut self.listed,
+        )
+        .map_err(|e| e.at(t))
     }
 
     /// A stop for a stall: impacts or events that keep coming without the time advancing

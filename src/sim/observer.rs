@@ -18,15 +18,19 @@ pub struct Sample<'a> {
     pub u: &'a [Real],
     /// Energies (J).
     pub energy: Energy,
-    /// Signed gap of every contact pair, in pair order (m).
+    /// The pairs this sample lists, in pair order: every pair of a model with at most
+    /// [`LISTED_PAIRS`](super::LISTED_PAIRS) pairs; beyond, the pairs whose bounding boxes
+    /// overlap and those in contact. `gaps`, `modes` and `slips` follow it.
+    pub pairs: &'a [PairId],
+    /// Signed gap of each listed pair (m).
     pub gaps: &'a [Real],
     /// World pose of every body, in body order.
     pub poses: &'a [Pose],
     /// `true` for the two samples taken at an impact instant (before and after the jump).
     pub at_impact: bool,
-    /// The mode of every contact pair, in pair order.
+    /// The mode of each listed pair.
     pub modes: &'a [PairMode],
-    /// The direction of the slip of every contact pair along its tangent `t = perp(n)`
+    /// The direction of the slip of each listed pair along its tangent `t = perp(n)`
     /// (`n` from `b` to `a`): `+1` or `−1` when it slides, `0` otherwise.
     pub slips: &'a [i8],
 }

@@ -117,7 +117,7 @@ pub fn pair_points(
 }
 
 fn body_pose_of_a(model: &Model, data: &Data, pair: PairId) -> Pose {
-    let a = model.pairs()[pair.index()].a;
+    let a = model.pair_of(pair).a;
     match model.colliders()[a.index()].body {
         Some(b) => data.body_pose[b.index()],
         None => Pose::IDENTITY,

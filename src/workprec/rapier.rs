@@ -285,7 +285,8 @@ impl<'m> RapierWorld<'m> {
         let dt = self.world.integration_parameters.dt;
         let steps = (t_end / dt).round() as u64;
         let mut u_before = u.clone();
-        let mut armed = vec![false; model.pairs().len()];
+        let pairs: Vec<PairId> = model.pair_ids().collect();
+        let mut armed = vec![false; pairs.len()];
         for _ in 0..steps {
             u_before.copy_from_slice(&u);
             self.step();
@@ -293,8 +294,7 @@ impl<'m> RapierWorld<'m> {
             self.read(&mut q, &mut u);
             update_positions(model, &mut self.data, t, &q).map_err(|e| query(t, e))?;
             update_velocities(model, &mut self.data, &u_before).map_err(|e| query(t, e))?;
-            for (k, armed) in armed.iter_mut().enumerate() {
-                let pair = PairId(k);
+            for (&pair, armed) in pairs.iter().zip(armed.iter_mut()) {
                 let Some(c) = pair_contact(model, &self.data, pair, Real::INFINITY)
                     .map_err(|e| query(t, e))?
                 else {

@@ -276,7 +276,9 @@ fn workprec(
 
 /// The reference of a scene and its name.
 fn reference_of(scene: &Scene, notes: &mut String) -> anyhow::Result<(Trace, String)> {
-    let material = scene.model.pairs()[0].material;
+    let material = (scene.model.pairs().next())
+        .with_context(|| format!("{}: no contact pair", scene.name))?
+        .material;
     if scene.name == "bouncing_ball" {
         let radius = scene.model.colliders()[0]
             .shape

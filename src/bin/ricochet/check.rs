@@ -154,7 +154,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         None
     };
 
-    let npairs = model.pairs().len();
+    let npairs = model.pair_count();
     let listed: Vec<PairId> = if args.full || npairs <= PAIRS_MAX {
         model.pair_ids().collect()
     } else {

@@ -17,7 +17,7 @@ use crate::model::{Material, Model, PairId};
 use crate::pgs::{self, PgsSettings, PgsStatus};
 use crate::state::Data;
 
-use super::super::{MaterialOverride, SimError};
+use super::super::{MaterialOverride, PairMap, SimError};
 
 /// One contact of the index set in a step.
 #[derive(Clone, Copy, Debug)]
@@ -62,15 +62,15 @@ pub(super) enum Solved {
     },
 }
 
-/// Scratch of the contact problem, allocated for every pair at once: a step allocates
-/// nothing, apart from the exact enumeration of [`crate::lcp`].
+/// Scratch of the contact problem, grown to the largest index set seen (a model lists no
+/// pairs: the index set comes from the broad phase).
 pub(super) struct ContactProblem {
     nu: usize,
     /// The index set, in pair order, then point order.
     pub active: Vec<Active>,
     /// Scratch of the contact points of a pair.
     manifold: ManifoldWorkspace,
-    /// `J_n` of each active contact, row `i` at `i·nu` (npairs · MAX_CONTACT_POINTS × nu).
+    /// `J_n` of each active contact, row `i` at `i·nu` (active contacts × nu).
     j_n: Vec<Real>,
     /// `J_t` of each active contact (same size).
     j_t: Vec<Real>,
@@ -88,9 +88,14 @@ pub(super) struct ContactProblem {
     mu: Vec<Real>,
     /// The last impulse at each contact point of each pair, for the warm start of
     /// Gauss–Seidel (zero when the point was not in the previous index set).
-    warm: Vec<[Impulse; MAX_CONTACT_POINTS]>,
+    warm: PairMap<[Impulse; MAX_CONTACT_POINTS]>,
     /// Whether each pair was in the index set of the previous step.
-    was_active: Vec<bool>,
+    was_active: PairMap<bool>,
+    /// The colliders' boxes of the broad phase.
+    boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
+    /// The margin of the boxes (m): `1e-9` of the largest shape, so that rounding in the
+    /// boxes cannot leave out a pair at a gap `≤ 0`.
+    margin: Real,
     frame_ws: FrameWorkspace,
     /// Contacts up to which the problem is solved by enumeration.
     exact_up_to: usize,
@@ -106,22 +111,26 @@ impl ContactProblem {
         (exact_up_to, rescue_up_to): (usize, usize),
         pgs: PgsSettings,
     ) -> Self {
-        let (np, nu) = (model.pairs().len(), model.nu());
-        let points = np * MAX_CONTACT_POINTS;
+        let nu = model.nu();
+        let size = (model.colliders().iter())
+            .map(|c| c.shape.compute_local_bounding_sphere().radius())
+            .fold(0.0, Real::max);
         Self {
             nu,
-            active: Vec::with_capacity(points),
+            active: Vec::new(),
             manifold: ManifoldWorkspace::default(),
-            j_n: vec![0.0; points * nu],
-            j_t: vec![0.0; points * nu],
-            x_n: vec![0.0; points * nu],
-            x_t: vec![0.0; points * nu],
-            a: Vec::with_capacity(4 * np * np),
-            b: Vec::with_capacity(2 * points),
-            x: Vec::with_capacity(2 * points),
-            mu: Vec::with_capacity(points),
-            warm: vec![[Impulse::default(); MAX_CONTACT_POINTS]; np],
-            was_active: vec![false; np],
+            j_n: Vec::new(),
+            j_t: Vec::new(),
+            x_n: Vec::new(),
+            x_t: Vec::new(),
+            a: Vec::new(),
+            b: Vec::new(),
+            x: Vec::new(),
+            mu: Vec::new(),
+            warm: PairMap::new([Impulse::default(); MAX_CONTACT_POINTS]),
+            was_active: PairMap::new(false),
+            boxes: Vec::new(),
+            margin: (1e-9 * size).max(1e-300),
             frame_ws: FrameWorkspace::new(model),
             exact_up_to,
             rescue_up_to,
@@ -134,6 +143,7 @@ impl ContactProblem {
         self.active.clear();
         self.warm.fill([Impulse::default(); MAX_CONTACT_POINTS]);
         self.was_active.fill(false);
+        self.boxes.clear();
     }
 
     /// Stage *index set*: the contact points ([`contact_points`]: the closest one, and the
@@ -152,8 +162,26 @@ impl ContactProblem {
         let nu = self.nu;
         self.active.clear();
         let mut entered = 0;
-        for k in 0..model.pairs().len() {
-            let pair = PairId(k);
+        // The pairs at a gap ≤ 0 are among those whose boxes overlap (the broad phase); the
+        // others leave the index set (no warm start, not active).
+        let margin = self.margin;
+        let boxes = &mut self.boxes;
+        boxes.clear();
+        for c in model.collider_ids() {
+            let pose =
+                crate::kinematics::collider_pose(model, data, c).map_err(|e| SimError::at(t, e))?;
+            let aabb = model.colliders()[c.index()].shape.compute_aabb(&pose);
+            boxes.push(parry2d_f64::bounding_volume::BoundingVolume::loosened(
+                &aabb, margin,
+            ));
+        }
+        let near = crate::contact::broad::overlapping_pairs(model, boxes);
+        let (mut warm, mut was_active) = (
+            PairMap::new([Impulse::default(); MAX_CONTACT_POINTS]),
+            PairMap::new(false),
+        );
+        for pair in near {
+            let k = pair.index();
             let points = contact_points(model, data, pair, 0.0, &mut self.manifold)
                 .map_err(|e| SimError::at(t, e))?;
             let mut closed = [false; MAX_CONTACT_POINTS];
@@ -164,6 +192,11 @@ impl ContactProblem {
                 closed[point] = true;
                 let slot = self.active.len();
                 let rows = slot * nu..(slot + 1) * nu;
+                for v in [&mut self.j_n, &mut self.j_t, &mut self.x_n, &mut self.x_t] {
+                    if v.len() < rows.end {
+                        v.resize(rows.end, 0.0);
+                    }
+                }
                 let frame = frame_at(
                     model,
                     data,
@@ -179,7 +212,7 @@ impl ContactProblem {
                     pair,
                     point,
                     frame,
-                    material: overrides.apply(model.pairs()[k].material),
+                    material: overrides.apply(model.pair_of(pair).material),
                     v_k: ContactVelocity::new(frame.v_n(), frame.v_t()),
                     v_free: ContactVelocity::default(),
                     v_next: ContactVelocity::default(),
@@ -190,13 +223,18 @@ impl ContactProblem {
             if any && !self.was_active[k] {
                 entered += 1;
             }
-            self.was_active[k] = any;
-            for (warm, closed) in self.warm[k].iter_mut().zip(closed) {
-                if !closed {
-                    *warm = Impulse::default();
+            if any {
+                was_active[k] = true;
+                let mut kept = self.warm[k];
+                for (warm, closed) in kept.iter_mut().zip(closed) {
+                    if !closed {
+                        *warm = Impulse::default();
+                    }
                 }
+                warm[k] = kept;
             }
         }
+        (self.warm, self.was_active) = (warm, was_active);
         Ok(entered)
     }
 

@@ -90,7 +90,7 @@ mod contacts;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::PairMode;
+use super::{PairMap, PairMode};
 use crate::dynamics::{
     Energy, coordinate_rates, energy, forward_dynamics, forward_dynamics_with, power,
 };
@@ -215,12 +215,16 @@ pub struct MoreauJean<'m> {
     /// Scratch for an interpolated sample (nq, nu).
     sample_q: Vec<Real>,
     sample_u: Vec<Real>,
+    /// The pairs a sample lists (see `sim::broad::listed_pairs`), their gaps, modes and
+    /// slips, and every pair when the model has few.
+    listed: Vec<PairId>,
+    all_pairs: Option<Vec<PairId>>,
     gap_values: Vec<Real>,
+    listed_modes: Vec<PairMode>,
+    listed_slips: Vec<i8>,
+    boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
     /// The mode of each pair in the current step.
-    modes: Vec<PairMode>,
-    /// The slip direction of each pair for the samples: 0 (time-stepping does not report
-    /// it).
-    slips: Vec<i8>,
+    modes: PairMap<PairMode>,
     /// Steps taken; the run has `n_steps`.
     k: u64,
     n_steps: u64,
@@ -267,7 +271,7 @@ impl<'m> MoreauJean<'m> {
                 reason: "the θ of Moreau–Jean must lie in [0.5, 1]",
             }));
         }
-        let (nq, nu, np) = (model.nq(), model.nu(), model.pairs().len());
+        let (nq, nu) = (model.nq(), model.nu());
         let scales = Scales::of(model, &settings.integrator);
         let g = model.gravity().length();
         let accel = if g > 0.0 {
@@ -300,9 +304,13 @@ impl<'m> MoreauJean<'m> {
             scratch_u: vec![0.0; nu],
             sample_q: vec![0.0; nq],
             sample_u: vec![0.0; nu],
-            gap_values: vec![0.0; np],
-            modes: vec![PairMode::Free; np],
-            slips: vec![0; np],
+            listed: Vec::new(),
+            all_pairs: super::broad::all_pairs_if_few(model),
+            gap_values: Vec::new(),
+            listed_modes: Vec::new(),
+            listed_slips: Vec::new(),
+            boxes: Vec::new(),
+            modes: PairMap::new(PairMode::Free),
             k: 0,
             n_steps: 0,
             t0: 0.0,
@@ -441,13 +449,13 @@ impl<'m> MoreauJean<'m> {
     /// A warning for every pair whose law is not Newton's: the scheme applies Newton's
     /// restitution at the velocity level whatever the scene says.
     fn warn_about_laws(&mut self, t0: Real, observer: &mut dyn Observer) -> Result<(), SimError> {
-        for (k, p) in self.model.pairs().iter().enumerate() {
-            let law = self.overrides.apply(p.material).law;
+        for id in self.model.pair_ids() {
+            let law = self.overrides.apply(self.model.pair_of(id).material).law;
             if law != Law::Newton {
                 let text = format!(
                     "pair {}: Moreau–Jean applies Newton's restitution at the velocity level; \
                      the law {law} is not used",
-                    super::impact_map::pair_name(self.model, PairId(k))
+                    super::impact_map::pair_name(self.model, id)
                 );
                 observer
                     .message(t0, Level::Warning, &text)
@@ -783,21 +791,38 @@ impl<'m> MoreauJean<'m> {
             return Ok(());
         }
         let e = energy(self.model, &mut self.sampler, t, q, u).map_err(|e| SimError::at(t, e))?;
-        for (k, g) in self.gap_values.iter_mut().enumerate() {
-            *g = crate::contact::signed_gap(self.model, &self.sampler, PairId(k), Real::INFINITY)
+        super::broad::listed_pairs(
+            self.model,
+            &self.sampler,
+            self.all_pairs.as_deref(),
+            self.modes.changed(),
+            &mut self.boxes,
+            &mut self.listed,
+        )
+        .map_err(|e| SimError::at(t, e))?;
+        self.gap_values.clear();
+        self.listed_modes.clear();
+        self.listed_slips.clear();
+        for &pair in &self.listed {
+            let g = crate::contact::signed_gap(self.model, &self.sampler, pair, Real::INFINITY)
                 .map_err(|e| SimError::at(t, e))?
                 .unwrap_or(Real::INFINITY);
+            self.gap_values.push(g);
+            self.listed_modes.push(self.modes[pair.index()]);
+            // Time-stepping does not report the slip direction.
+            self.listed_slips.push(0);
         }
         let sample = Sample {
             t,
             q,
             u,
             energy: e,
+            pairs: &self.listed,
             gaps: &self.gap_values,
             poses: &self.sampler.body_pose,
             at_impact: false,
-            modes: &self.modes,
-            slips: &self.slips,
+            modes: &self.listed_modes,
+            slips: &self.listed_slips,
         };
         observer
             .sample(self.model, &sample)

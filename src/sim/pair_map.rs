@@ -1,0 +1,88 @@
+//! [`PairMap`]: a value per contact pair, stored only for the pairs that differ from a
+//! default (the modes, slips and accumulations of the loop: a few pairs among millions).
+
+use std::collections::BTreeMap;
+use std::ops::{Index, IndexMut};
+
+use crate::model::PairId;
+
+/// A value for every contact pair, indexed by [`PairId::index`]: the default for all but
+/// the pairs written, which are kept in pair order. Writing through `IndexMut` stores the
+/// pair (with the default first); [`PairMap::fill`] forgets them all.
+#[derive(Clone, Debug, Default)]
+pub struct PairMap<T> {
+    default: T,
+    map: BTreeMap<usize, T>,
+}
+
+impl<T: Clone> PairMap<T> {
+    /// Every pair at `default`.
+    pub fn new(default: T) -> Self {
+        Self {
+            default,
+            map: BTreeMap::new(),
+        }
+    }
+
+    /// Every pair at `value` again.
+    pub fn fill(&mut self, value: T) {
+        self.map.clear();
+        self.default = value;
+    }
+
+    /// The pairs stored (written since the last fill or prune), in pair order.
+    pub fn stored(&self) -> impl Iterator<Item = PairId> + '_ {
+        self.map.keys().map(|&k| PairId(k))
+    }
+}
+
+impl<T: Clone + PartialEq> PairMap<T> {
+    /// The pairs stored (written since the last fill) whose value is not the default, in
+    /// pair order.
+    pub fn changed(&self) -> impl Iterator<Item = PairId> + '_ {
+        (self.map.iter())
+            .filter(|(_, v)| **v != self.default)
+            .map(|(&k, _)| PairId(k))
+    }
+
+    /// Forgets the pairs at the default value (their storage).
+    pub fn prune(&mut self) {
+        let default = &self.default;
+        self.map.retain(|_, v| v != default);
+    }
+}
+
+impl<T> Index<usize> for PairMap<T> {
+    type Output = T;
+    fn index(&self, k: usize) -> &T {
+        self.map.get(&k).unwrap_or(&self.default)
+    }
+}
+
+impl<T: Clone> IndexMut<usize> for PairMap<T> {
+    fn index_mut(&mut self, k: usize) -> &mut T {
+        self.map.entry(k).or_insert_with(|| self.default.clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PairMap;
+    use crate::model::PairId;
+
+    #[test]
+    fn only_written_pairs_are_stored() {
+        let mut m = PairMap::new(0i8);
+        assert_eq!(m[7], 0);
+        m[7] = 1;
+        m[3] = 0;
+        m[5] = -1;
+        assert_eq!((m[7], m[5], m[3], m[4]), (1, -1, 0, 0));
+        assert_eq!(m.changed().collect::<Vec<_>>(), vec![PairId(5), PairId(7)]);
+        m.prune();
+        assert_eq!(m.map.len(), 2);
+        m.fill(2);
+        assert_eq!((m[7], m[0]), (2, 2));
+        assert_eq!(m.changed().count(), 0);
+    }
+}
