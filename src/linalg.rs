@@ -25,15 +25,11 @@ use crate::math::Real;
 /// reused without allocating.
 #[derive(Clone, Debug, Default)]
 pub struct MinNorm {
-    /// The factor `R` (upper), with the Householder vectors below its diagonal.
+    /// The factor `R` (upper), with the Householder vectors (but their first entries) below
+    /// its diagonal; `Qᵀ` is applied to `b` as it is made.
     r: DMatrix<Real>,
-    /// The first entries of the Householder vectors of `R`, and their `β`.
-    head: Vec<Real>,
-    beta: Vec<Real>,
     /// The column permutation: column `j` of the factored matrix is column `perm[j]` of `A`.
     perm: Vec<usize>,
-    /// The remaining column norms (squared).
-    norms: Vec<Real>,
     /// `Qᵀ b`.
     c: Vec<Real>,
     /// `R₁ᵀ` (n × r) and its factor, with Householder vectors below the diagonal.
@@ -61,6 +57,31 @@ fn householder(x: impl Iterator<Item = Real> + Clone) -> (Real, Real, Real) {
     (alpha, v0, beta)
 }
 
+/// Applies the reflection `H = I − β v vᵀ` of column `k` of `m` (`v = (v₀, m[k+1.., k])`)
+/// to rows `k..` of column `j` of `m`.
+fn reflect_column(m: &mut DMatrix<Real>, k: usize, (v0, beta): (Real, Real), j: usize) {
+    let rows = m.nrows();
+    let dot = v0 * m[(k, j)] + (k + 1..rows).map(|i| m[(i, k)] * m[(i, j)]).sum::<Real>();
+    let f = beta * dot;
+    m[(k, j)] -= f * v0;
+    for i in k + 1..rows {
+        let vi = m[(i, k)];
+        m[(i, j)] -= f * vi;
+    }
+}
+
+/// Applies the reflection of column `k` of `m` (as in [`reflect_column`]) to rows `k..`
+/// of `y`.
+fn reflect_vector(m: &DMatrix<Real>, k: usize, (v0, beta): (Real, Real), y: &mut [Real]) {
+    let rows = m.nrows();
+    let dot = v0 * y[k] + (k + 1..rows).map(|i| m[(i, k)] * y[i]).sum::<Real>();
+    let f = beta * dot;
+    y[k] -= f * v0;
+    for i in k + 1..rows {
+        y[i] -= f * m[(i, k)];
+    }
+}
+
 impl MinNorm {
     /// A workspace.
     pub fn new() -> Self {
@@ -85,12 +106,7 @@ impl MinNorm {
         self.c.extend(b.iter());
         self.perm.clear();
         self.perm.extend(0..n);
-        self.head.clear();
-        self.beta.clear();
-        self.norms.clear();
-        self.norms
-            .extend((0..n).map(|j| self.r.column(j).norm_squared()));
-        let first = self.norms.iter().copied().fold(0.0, Real::max).sqrt();
+        let first = (0..n).map(|j| self.r.column(j).norm()).fold(0.0, Real::max);
         let tol = m.max(n) as Real * Real::EPSILON * first;
         let mut rank = 0;
         for k in 0..m.min(n) {
@@ -98,7 +114,6 @@ impl MinNorm {
             let mut best = (k, -1.0);
             for j in k..n {
                 let s: Real = (k..m).map(|i| self.r[(i, j)] * self.r[(i, j)]).sum();
-                self.norms[j] = s;
                 if s > best.1 {
                     best = (j, s);
                 }
@@ -109,28 +124,12 @@ impl MinNorm {
             self.r.swap_columns(k, best.0);
             self.perm.swap(k, best.0);
             let (alpha, v0, beta) = householder((k..m).map(|i| self.r[(i, k)]));
-            // Apply H to the columns right of k and to c: y −= β v (vᵀ y).
+            // Apply H to the columns right of k and to c.
             for j in k + 1..n {
-                let dot = v0 * self.r[(k, j)]
-                    + (k + 1..m)
-                        .map(|i| self.r[(i, k)] * self.r[(i, j)])
-                        .sum::<Real>();
-                let f = beta * dot;
-                self.r[(k, j)] -= f * v0;
-                for i in k + 1..m {
-                    let vi = self.r[(i, k)];
-                    self.r[(i, j)] -= f * vi;
-                }
+                reflect_column(&mut self.r, k, (v0, beta), j);
             }
-            let dot = v0 * self.c[k] + (k + 1..m).map(|i| self.r[(i, k)] * self.c[i]).sum::<Real>();
-            let f = beta * dot;
-            self.c[k] -= f * v0;
-            for i in k + 1..m {
-                self.c[i] -= f * self.r[(i, k)];
-            }
+            reflect_vector(&self.r, k, (v0, beta), &mut self.c);
             self.r[(k, k)] = alpha;
-            self.head.push(v0);
-            self.beta.push(beta);
             rank = k + 1;
         }
         let r = rank;
@@ -155,16 +154,7 @@ impl MinNorm {
             for k in 0..r {
                 let (alpha, v0, beta) = householder((k..n).map(|i| self.t[(i, k)]));
                 for j in k + 1..r {
-                    let dot = v0 * self.t[(k, j)]
-                        + (k + 1..n)
-                            .map(|i| self.t[(i, k)] * self.t[(i, j)])
-                            .sum::<Real>();
-                    let f = beta * dot;
-                    self.t[(k, j)] -= f * v0;
-                    for i in k + 1..n {
-                        let vi = self.t[(i, k)];
-                        self.t[(i, j)] -= f * vi;
-                    }
+                    reflect_column(&mut self.t, k, (v0, beta), j);
                 }
                 self.t[(k, k)] = alpha;
                 self.head_t.push(v0);
@@ -176,14 +166,8 @@ impl MinNorm {
                 self.z[i] = (self.c[i] - s) / self.t[(i, i)];
             }
             for k in (0..r).rev() {
-                let (v0, beta) = (self.head_t[k], self.beta_t[k]);
-                let dot =
-                    v0 * self.z[k] + (k + 1..n).map(|i| self.t[(i, k)] * self.z[i]).sum::<Real>();
-                let f = beta * dot;
-                self.z[k] -= f * v0;
-                for i in k + 1..n {
-                    self.z[i] -= f * self.t[(i, k)];
-                }
+                let hk = (self.head_t[k], self.beta_t[k]);
+                reflect_vector(&self.t, k, hk, &mut self.z);
             }
         }
         if x.len() != n {

@@ -214,18 +214,16 @@ fn linear(
     // chain), so that consistent systems were taken for inconsistent ones (src/linalg.rs).
     let mut ls = MinNorm::new();
     let mut x = DVector::zeros(m);
-    if let Some(x_ref) = reference {
-        // x = x_ref + δ, δ the least change that meets the equations.
-        let mut delta = DVector::zeros(m);
-        ls.solve(&lhs, &(&rhs - &lhs * x_ref), &mut delta);
-        x = x_ref + delta;
-        if !(x.iter().all(|v| v.is_finite()) && holds(&x)) {
-            return None;
+    // With a reference: x = x_ref + δ, δ the least change that meets the equations (the
+    // split is then the reference's, not the proportional one below).
+    let rank = match reference {
+        Some(x_ref) => {
+            ls.solve(&lhs, &(&rhs - &lhs * x_ref), &mut x);
+            x += x_ref;
+            None
         }
-        let w = a * &x + b;
-        return Some((x, w));
-    }
-    let rank = ls.solve(&lhs, &rhs, &mut x);
+        None => Some(ls.solve(&lhs, &rhs, &mut x)),
+    };
     if !(x.iter().all(|v| v.is_finite()) && holds(&x)) {
         return None;
     }
@@ -237,7 +235,7 @@ fn linear(
     // proportion to what its cone allows, within every cone whenever the total fits:
     // the minimum-norm solution in y_t,k = x_t,k / √(μ_k x_n,k), with the normal forces of
     // the first solution. Regular systems are left as they were.
-    if rank < m && modes.contains(&Mode::Stick) {
+    if rank.is_some_and(|rank| rank < m) && modes.contains(&Mode::Stick) {
         let mut scale = DVector::from_element(m, 1.0);
         for (i, mode) in modes.iter().enumerate() {
             if *mode == Mode::Stick {

@@ -815,13 +815,12 @@ impl Simulation<'_> {
             })
             .collect();
         let v_slip = 1e3 * self.scales.v_tiny;
-        let sel = self.select_at(t, y, &candidates, v_slip)?;
+        let mut sel = self.select_at(t, y, &candidates, v_slip)?;
         // A point that starts to slip from rest must slip the way its acceleration goes:
         // a solution that slows it down (s ẇ_t < 0 beyond rounding) is no start of a slip —
         // its slip would stop at once, and the selection would take it again (the 8-link
         // chain stalled so at t = 5.0309 s). Forced slips of moving points are not checked.
         let scale_w = sel.free.iter().fold(0.0, |m: Real, b| m.max(b.abs()));
-        let mut sel = sel;
         let starts: Vec<(usize, Real)> = (0..resting.len())
             .filter_map(|i| Some((i, slips[i]?)))
             .filter(|&(i, _)| sel.points[i].v_t.abs() <= v_slip)
