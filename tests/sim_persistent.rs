@@ -515,6 +515,23 @@ fn mode_changes_reach_the_log_and_the_state_messages() {
     }
 }
 
+/// Every entry of a simultaneous impact meets the generalized Newton law: `P_n ≥ 0` and
+/// `v_n⁺ + e v_n⁻ ≥ 0` (to 1e-6 of the approach speed, or of 1 mm/s).
+fn assert_simultaneous_impacts_obey_newton(rec: &Recorder) {
+    for ev in rec
+        .impacts
+        .iter()
+        .filter(|ev| ev.cause == ImpactCause::Simultaneous)
+    {
+        let scale = ev.v_a.n.abs().max(1e-3);
+        assert!(ev.outcome.impulse.n >= 0.0, "{ev:?}");
+        assert!(
+            ev.outcome.v_s.n + ev.material.e * ev.v_a.n >= -1e-6 * scale,
+            "{ev:?}"
+        );
+    }
+}
+
 /// The 16-link chain landing on the floor (to 1 s). Until issue 15 the event-driven loop
 /// stopped at t = 0.8062 s at a simultaneous impact of 8 points, more than its exact
 /// enumeration took (6). The complementarity solver takes it: the run gets through impacts
@@ -530,18 +547,7 @@ fn a_chain_of_16_links_gets_past_an_impact_of_more_than_six_points() {
     scene.settings.t_end = 1.0;
     let (rec, summary, _) = run(&scene, MaterialOverride::default());
     println!("{}; {} impacts", summary.stop, rec.impacts.len());
-    for ev in rec
-        .impacts
-        .iter()
-        .filter(|ev| ev.cause == ImpactCause::Simultaneous)
-    {
-        let scale = ev.v_a.n.abs().max(1e-3);
-        assert!(ev.outcome.impulse.n >= 0.0, "{ev:?}");
-        assert!(
-            ev.outcome.v_s.n + ev.material.e * ev.v_a.n >= -1e-6 * scale,
-            "{ev:?}"
-        );
-    }
+    assert_simultaneous_impacts_obey_newton(&rec);
     // An impact of more than six points solved: its warning, before the run's end.
     let solved = (rec.messages.iter()).any(|(t, _, m)| {
         *t < summary.state.t
@@ -608,18 +614,7 @@ fn a_chain_of_32_links_lands_and_lies_on_the_floor_in_few_steps() {
         "{}",
         summary.stop
     );
-    for ev in rec
-        .impacts
-        .iter()
-        .filter(|ev| ev.cause == ImpactCause::Simultaneous)
-    {
-        let scale = ev.v_a.n.abs().max(1e-3);
-        assert!(ev.outcome.impulse.n >= 0.0, "{ev:?}");
-        assert!(
-            ev.outcome.v_s.n + ev.material.e * ev.v_a.n >= -1e-6 * scale,
-            "{ev:?}"
-        );
-    }
+    assert_simultaneous_impacts_obey_newton(&rec);
     assert!(
         summary.counters.steps < 20_000,
         "{}",

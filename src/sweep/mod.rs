@@ -3,9 +3,9 @@
 //!
 //! - [`spec`]: one parameter, `name=start:stop:step` (`value_k = start + k·step`, the
 //!   stop inclusive within [`spec::RANGE_TOLERANCE`] steps) or `name=v1,v2,…`. The
-//!   parameters: `e`, `mu`, `law`, `method`, `simultaneous`, `t_end`, `rtol`, `atol`, `dt`, `h_max`, and
-//!   the initial state by coordinate name, `q0.<coordinate>`, `u0.<coordinate>`
-//!   (`q0.ball.y`).
+//!   parameters: `e`, `mu`, `law`, `method`, `simultaneous`, `t_end`, `rtol`, `atol`,
+//!   `dt`, `h_max`, and the initial state by coordinate name, `q0.<coordinate>`,
+//!   `u0.<coordinate>` (`q0.ball.y`).
 //! - [`grid`]: the Cartesian product (the first parameter varies slowest; the run index is
 //!   the mixed-radix number of the value indices) and the shard `i/N` (the runs with
 //!   `index mod N = i`).
