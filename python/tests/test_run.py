@@ -191,6 +191,10 @@ def test_ctrl_c_stops_a_run_and_finishes_its_log(tmp_path) -> None:
     script = textwrap.dedent(
         f"""
         import sys, ricochet
+        # A child started from a background job (`cmd &` in a script) inherits SIGINT
+        # ignored, and Python then installs no KeyboardInterrupt handler: restore it.
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         scene = ricochet.Scene.load({str(SCENES / "rimless_wheel.toml")!r})
         print("running", flush=True)
         try:

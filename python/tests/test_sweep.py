@@ -108,6 +108,10 @@ def test_ctrl_c_stops_a_sweep() -> None:
     script = textwrap.dedent(
         f"""
         import sys, numpy as np, ricochet
+        # A child started from a background job (`cmd &` in a script) inherits SIGINT
+        # ignored, and Python then installs no KeyboardInterrupt handler: restore it.
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         print("running", flush=True)
         try:
             ricochet.sweep({str(SCENES / "rimless_wheel.toml")!r}, {{"e": np.linspace(0, 1, 50), "t_end": [1e4]}})
