@@ -4,20 +4,26 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The `ricochet` binary built for the tests.
 pub const BIN: &str = env!("CARGO_BIN_EXE_ricochet");
 
 /// A fresh, empty temporary folder for one test, removed when dropped (named after the
-/// test binary, the process and the test, so that tests running at once never share one).
+/// test binary, the process, a number drawn once per folder and the test, so that tests
+/// running at once never share one, even two of one binary that give the same name).
 pub struct TempDir(PathBuf);
+
+/// The number of the next `TempDir` of this process.
+static NEXT: AtomicUsize = AtomicUsize::new(0);
 
 impl TempDir {
     pub fn new(test: &str) -> TempDir {
         let dir = std::env::temp_dir().join(format!(
-            "ricochet-{}-{}-{test}",
+            "ricochet-{}-{}-{}-{test}",
             env!("CARGO_CRATE_NAME"),
-            std::process::id()
+            std::process::id(),
+            NEXT.fetch_add(1, Ordering::Relaxed)
         ));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
