@@ -3,11 +3,9 @@
 //! `ode_rhs`, the energies, the powers, `solve_mass` and the point kinematics once `Data`
 //! exists.
 
-#[path = "model_fixtures.rs"]
-mod fixtures;
+use crate::common::model_fixtures as fixtures;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use crate::common::alloc::allocations;
 
 use fixtures::{Rng, TreeOptions, chain, random_tree};
 use nalgebra::Matrix2xX;
@@ -17,34 +15,6 @@ use ricochet::dynamics::{
 use ricochet::kinematics::{point_jacobian, point_velocity, point_world};
 use ricochet::math::{Pose, Vec2};
 use ricochet::state::Data;
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator; only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
 
 #[test]
 fn the_right_hand_side_allocates_nothing() {

@@ -17,12 +17,10 @@ use std::time::{Duration, Instant};
 
 use ricochet::log::Ending;
 
-#[path = "common/mcap_check.rs"]
-mod mcap_check;
+use crate::common::mcap_check;
 use mcap_check::{assert_every_chunk_has_messages, messages};
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::{BIN, TempDir, ricochet};
 
 fn scene_path(name: &str) -> PathBuf {

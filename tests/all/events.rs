@@ -4,8 +4,7 @@
 //! step, roots at the step's start, bounces and reclosing inside one step, and the
 //! documented limits of sampling.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use crate::common::alloc::allocations_in;
 use std::convert::Infallible;
 
 use ricochet::events::{
@@ -15,49 +14,6 @@ use ricochet::events::{
 use ricochet::integrate::{
     Dopri5, Dopri5Settings, FnSystem, OdeSystem, Rk4, Rk4Settings, StepOutcome, Stepper,
 };
-
-// ---------------------------------------------------------------------------------------
-// Allocation counter (this thread, while tracking).
-
-struct CountingAlloc;
-
-thread_local! {
-    static TRACK: Cell<bool> = const { Cell::new(false) };
-    static ALLOCS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_alloc() {
-    let _ = TRACK.try_with(|t| {
-        if t.get() {
-            let _ = ALLOCS.try_with(|a| a.set(a.get() + 1));
-        }
-    });
-}
-
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_alloc();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_alloc();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: CountingAlloc = CountingAlloc;
-
-fn allocations_in(f: impl FnOnce()) -> u64 {
-    ALLOCS.with(|a| a.set(0));
-    TRACK.with(|t| t.set(true));
-    f();
-    TRACK.with(|t| t.set(false));
-    ALLOCS.with(|a| a.get())
-}
 
 // ---------------------------------------------------------------------------------------
 // The ball: y = (height, velocity), ÿ = −g − c ẏ, floor at height 0.

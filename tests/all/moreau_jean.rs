@@ -537,8 +537,7 @@ fn ricochet_run_with_moreau_jean_writes_the_same_kind_of_log() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-#[path = "common/rng.rs"]
-mod rng;
+use crate::common::rng;
 use rng::Rng;
 
 /// A random contact problem: `A = J M⁻¹ Jᵀ` (2m × 2m) from a random `J` (2m × nu) and a

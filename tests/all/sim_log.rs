@@ -26,10 +26,8 @@
 //! - a writer that was never finished (a killed process) leaves a file that reads back up
 //!   to its last flush.
 
-#[path = "common/mcap_check.rs"]
-mod mcap_check;
-#[path = "common/shared_file.rs"]
-mod shared_file;
+use crate::common::mcap_check;
+use crate::common::shared_file;
 
 use std::collections::{BTreeMap, HashMap};
 use std::io::{Cursor, Seek, Write};

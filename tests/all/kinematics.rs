@@ -2,8 +2,7 @@
 //! finite differences of point positions.
 #![allow(clippy::needless_range_loop)]
 
-#[path = "model_fixtures.rs"]
-mod fixtures;
+use crate::common::model_fixtures as fixtures;
 
 use fixtures::{Rng, TreeOptions, double_pendulum, random_tree};
 use nalgebra::Matrix2xX;

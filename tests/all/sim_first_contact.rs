@@ -26,8 +26,7 @@ use ricochet::state::State;
 
 const G: Real = 9.81;
 
-#[path = "common/rng.rs"]
-mod rng;
+use crate::common::rng;
 use rng::Rng;
 
 /// One drop: a body shape, its initial pose and velocity, an obstacle.

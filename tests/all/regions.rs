@@ -7,15 +7,13 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-mod common;
-use common::{Golden, golden, pendulum, printed};
+use crate::common::paper::{Golden, golden, pendulum, printed};
 use ricochet::impact::{CollisionType, ImpactMatrix, Law};
 use ricochet::regions::{
     self, Axis, BoundaryKind, Cell, EnergySign, MapSpec, RegionMap, RegionsError,
 };
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::{BIN, TempDir};
 
 /// W of every sign case of Table 1 (and of both sides of it, through the mirror at α < 0),

@@ -3,8 +3,7 @@
 //! (chains, stars, free bodies, mixed), the factor against the `L` a matrix was built
 //! from, and the storage against the ancestor pattern (no entry beyond it).
 
-#[path = "model_fixtures.rs"]
-mod fixtures;
+use crate::common::model_fixtures as fixtures;
 
 use fixtures::{Rng, TreeOptions, chain, random_tree};
 use nalgebra::{Cholesky, DMatrix, DVector};

@@ -8,8 +8,7 @@
 
 use nalgebra::Vector2;
 
-mod common;
-use common::{Golden, golden, pendulum, printed};
+use crate::common::paper::{Golden, golden, pendulum, printed};
 use ricochet::impact::{self, ImpactProblem, Law, kane_levinson};
 
 fn law_of(name: &str) -> Law {

@@ -20,8 +20,7 @@ use std::process::{Command, Output, Stdio};
 
 use serde_json::Value;
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::{BIN, TempDir};
 
 fn repo(rel: &str) -> PathBuf {

@@ -7,8 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use ricochet::lcp::lemke::{Lemke, LemkeStatus};
 use ricochet::lcp::{self, Allowed, LcpError, Mode, Solver};
 
-#[path = "common/rng.rs"]
-mod rng;
+use crate::common::rng;
 use rng::Rng;
 
 /// A random contact problem of `n` contacts: `A = J M⁻¹ Jᵀ` with a random SPD `M`
@@ -511,15 +510,15 @@ fn the_chain_of_32_links_on_the_floor_is_solved() {
     for (name, text) in [
         (
             "6 contacts",
-            include_str!("data/lcp/chain32_6_contacts.txt"),
+            include_str!("../data/lcp/chain32_6_contacts.txt"),
         ),
         (
             "8 contacts",
-            include_str!("data/lcp/chain32_8_contacts.txt"),
+            include_str!("../data/lcp/chain32_8_contacts.txt"),
         ),
         (
             "16 links, 11 contacts",
-            include_str!("data/lcp/chain16_11_contacts.txt"),
+            include_str!("../data/lcp/chain16_11_contacts.txt"),
         ),
     ] {
         let (a, b, allowed) = dumped(text);

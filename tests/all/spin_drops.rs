@@ -17,8 +17,7 @@ use ricochet::sim::{MaterialOverride, Recorder, Simulation};
 const G: f64 = 9.81;
 const T_MAX: f64 = 0.6;
 
-#[path = "common/rng.rs"]
-mod rng;
+use crate::common::rng;
 use rng::Rng;
 
 /// A body shape: its TOML and its parry shape, and the largest distance of its points

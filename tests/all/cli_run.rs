@@ -29,8 +29,7 @@ use ricochet::log::{Ending, ImpactRecord, LogOptions, LogWriter, RunLogger, Topi
 use ricochet::sim::{MaterialOverride, NullObserver, Simulation};
 use serde_json::{Value, json};
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::{BIN, TempDir, ricochet};
 
 fn scene_path(name: &str) -> PathBuf {

@@ -28,8 +28,7 @@ use ricochet::log::{
 };
 use ricochet::sim::{MaterialOverride, Simulation};
 
-#[path = "common/mcap_check.rs"]
-mod mcap_check;
+use crate::common::mcap_check;
 use mcap_check::{Msg, assert_every_chunk_has_messages, messages};
 
 /// The log of `scenes/bouncing_ball.toml` up to `t_end`, written by the library with

@@ -7,9 +7,7 @@
 //! the last printed digit (with the print errors of `tests/golden/paper_table_2.toml`
 //! checked against the closed form instead).
 
-mod common;
-
-use common::{golden, pendulum, printed};
+use crate::common::paper::{golden, pendulum, printed};
 use ricochet::impact::{self, ImpactProblem, Law};
 use ricochet::integrate::Method;
 use ricochet::sim::{ImpactEvent, MaterialOverride, Recorder, Simulation};

@@ -27,8 +27,7 @@ use ricochet::regress::{
 };
 use ricochet::sim::{ImpactEvent, Level, Observer, ObserverError, Sample, Simulation};
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::TempDir;
 
 fn repo(rel: &str) -> PathBuf {

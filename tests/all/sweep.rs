@@ -30,8 +30,7 @@ use ricochet::sweep::{
     read_table, write_table,
 };
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::{TempDir, ricochet};
 
 fn scene_path(name: &str) -> PathBuf {

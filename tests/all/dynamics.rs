@@ -4,8 +4,7 @@
 //! conservation in free flight, and invariance under rigid motions of the whole scene.
 #![allow(clippy::needless_range_loop)]
 
-#[path = "model_fixtures.rs"]
-mod fixtures;
+use crate::common::model_fixtures as fixtures;
 
 use fixtures::{Rng, TreeOptions, chain, double_pendulum, random_tree};
 use nalgebra::{DMatrix, DVector};

@@ -3,58 +3,13 @@
 //! the tolerance, exact work counters, re-step and reset semantics, typed errors, and no
 //! allocation inside a step.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use crate::common::alloc::allocations_in;
 
 use ricochet::integrate::{
     AnyStepper, Dopri5, Dopri5Settings, FnSystem, IntegrateError, Method, OdeSystem, Rk4,
     Rk4Settings, RungeKutta, StepOutcome, Stepper,
 };
 use ricochet::settings::IntegratorSettings;
-
-// ---------------------------------------------------------------------------------------
-// Allocation counter: counts allocations of the current thread while tracking is on.
-
-struct CountingAlloc;
-
-thread_local! {
-    static TRACK: Cell<bool> = const { Cell::new(false) };
-    static ALLOCS: Cell<u64> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = TRACK.try_with(|t| {
-            if t.get() {
-                let _ = ALLOCS.try_with(|a| a.set(a.get() + 1));
-            }
-        });
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = TRACK.try_with(|t| {
-            if t.get() {
-                let _ = ALLOCS.try_with(|a| a.set(a.get() + 1));
-            }
-        });
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: CountingAlloc = CountingAlloc;
-
-/// Allocations made by `f` on this thread.
-fn allocations_in(f: impl FnOnce()) -> u64 {
-    ALLOCS.with(|a| a.set(0));
-    TRACK.with(|t| t.set(true));
-    f();
-    TRACK.with(|t| t.set(false));
-    ALLOCS.with(|a| a.get())
-}
 
 // ---------------------------------------------------------------------------------------
 // Problems with exact solutions. Their spans are multiples of powers of two, so that the

@@ -13,10 +13,8 @@
 //!
 //! Regenerate the fixture with `bash tests/data/regenerate.sh`.
 
-#[path = "common/mcap_check.rs"]
-mod mcap_check;
-#[path = "common/shared_file.rs"]
-mod shared_file;
+use crate::common::mcap_check;
+use crate::common::shared_file;
 
 use std::collections::{BTreeMap, HashMap};
 use std::io::{Cursor, Seek, SeekFrom, Write};

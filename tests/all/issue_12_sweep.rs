@@ -14,8 +14,7 @@ use std::time::{Duration, Instant};
 
 use ricochet::sweep::{Grid, ParamSpec, Shard, Sweep, SweepError, merge, read_table};
 
-#[path = "common/cli.rs"]
-mod cli;
+use crate::common::cli;
 use cli::{BIN, TempDir, ricochet};
 
 fn scene_path(name: &str) -> PathBuf {
