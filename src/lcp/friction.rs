@@ -63,7 +63,7 @@
 //! no solution exists either (`M` is not copositive-plus: a sliding solution may exist that
 //! the path misses). In floating point the path must also see exactly-zero basic values as
 //! zero; the rays the 32-link chain met (b_n = 0 at rest, two points at one hinge) were
-//! rounding (`lcp::lemke`, "Numerics"): `tests/lcp_lemke.rs` counts rays on 600 such
+//! rounding (`lcp::lemke`, "Numerics"): `tests/all/lcp_lemke.rs` counts rays on 600 such
 //! problems of up to 32 points (zero) and the misses on random ones.
 //!
 //! References: **[ST]** D. E. Stewart, J. C. Trinkle, *An implicit time-stepping scheme for
@@ -92,7 +92,7 @@ pub enum LcpError {
         /// A contact had a known slip: the LCP matrix is not copositive, and Lemke's rays
         /// (along `1 + RETRIES` covering vectors) do not prove that no solution exists
         /// (measured: 17 solvable problems of 8,000 random ones reported so, all with a
-        /// known slip; `tests/lcp_lemke.rs`).
+        /// known slip; `tests/all/lcp_lemke.rs`).
         known_slip: bool,
     },
     /// Lemke's algorithm reached its pivot limit.

@@ -68,7 +68,7 @@ fn fails(dir: &Path, args: &[&str], needles: &[&str]) {
     }
 }
 
-/// A long run (`pendulum_wall`, elastic, `t_end = 10⁶` s, as in `tests/cli_run.rs`)
+/// A long run (`pendulum_wall`, elastic, `t_end = 10⁶` s, as in `tests/all/cli_run.rs`)
 /// killed with SIGKILL once its log holds several chunks.
 #[test]
 fn a_killed_run_is_repaired() {

@@ -4,8 +4,8 @@
 //! that load. Never a panic, never a hang (the run is watched by a clock and must stop
 //! within its budget), and every refused scene names its file, line and field.
 //!
-//! A few hundred cases run in the default suite; `cargo test --release --test fuzz_scenes
-//! -- --ignored` runs 10,000.
+//! A few hundred cases run in the default suite; `cargo test --release --test all
+//! fuzz_scenes:: -- --ignored` runs 10,000.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, mpsc};

@@ -185,7 +185,7 @@ proptest! {
 fn table_2_rows_by_the_march() {
     // The Sect. 5 pendulum (W and v^A to the printed digits): the march reproduces the
     // printed v_t^S of the Newton rows 1–3 and 5 (row 4's print is an error, see
-    // tests/paper_table_2.rs).
+    // tests/all/paper_table_2.rs).
     let w = ImpactMatrix::new(0.33652, -0.50710, 0.81345);
     for (e, mu, vts) in [
         (0.5, 0.2, -0.078),

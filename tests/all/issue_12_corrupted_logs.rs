@@ -16,7 +16,8 @@
 //! - a repair, when it succeeds, writes a finished file that reads back complete.
 //!
 //! The default suite runs a few hundred cases of each kind; the `#[ignore]`d tests run
-//! 10,000 of each (`cargo test --release --test issue_12_corrupted_logs -- --ignored`).
+//! 10,000 of each (`cargo test --release --test all issue_12_corrupted_logs:: --
+//! --ignored`).
 
 use crate::common::alloc::largest_allocation;
 use std::io::Cursor;

@@ -20,7 +20,7 @@
 //! - the exit status is 1 iff some line failed, and standard error counts them.
 //!
 //! The default suite runs about 400 lines; the `#[ignore]`d test 10,000
-//! (`cargo test --release --test issue_12_impact_lines -- --ignored --nocapture`).
+//! (`cargo test --release --test all issue_12_impact_lines:: -- --ignored --nocapture`).
 
 use std::io::Write;
 use std::process::{Command, Stdio};

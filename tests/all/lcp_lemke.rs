@@ -503,7 +503,7 @@ fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
 /// points at rest, every slip unknown. Lemke's path ended on a ray after 25 pivots, which
 /// Anitescu and Potra's theorem excludes (module `lcp::friction`): now solved, and the
 /// solution satisfies the table's conditions to rounding. The 16-link chain's 11-point
-/// impact at t = 0.9196 s (`tests/sim_persistent.rs`'s run) ended `Inaccurate` (1.4e-2:
+/// impact at t = 0.9196 s (`tests/all/sim_persistent.rs`'s run) ended `Inaccurate` (1.4e-2:
 /// a pivot on a rounding zero, `lcp::lemke::CANCEL_TOL`).
 #[test]
 fn the_chain_of_32_links_on_the_floor_is_solved() {

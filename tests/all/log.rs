@@ -1055,7 +1055,8 @@ fn a_format_1_log_is_still_read() {
     assert_eq!(read.count(Topic::Scene), 1 + 3 + 1);
 }
 
-/// Rewrites the fixture: `cargo test --test log -- --ignored regenerate_fixture`.
+/// Rewrites the fixture: `bash tests/data/regenerate.sh` (`cargo test --test all --
+/// --ignored --exact log::regenerate_fixture`).
 #[test]
 #[ignore = "writes tests/data/fixture.mcap"]
 fn regenerate_fixture() {

@@ -251,7 +251,7 @@ fn table_2_rows_fall_in_the_cells_the_map_says() {
             );
         }
         // The printed type and the sign of the printed ΔE (rows printed with no solution:
-        // see tests/paper_table_2.rs).
+        // see tests/all/paper_table_2.rs).
         let (Some(kind), Some(de)) = (row.kind, &row.delta_e) else {
             continue;
         };
@@ -408,7 +408,7 @@ fn bad_maps_are_typed_errors() {
     // A singular W (one degree of freedom) is accepted: the laws jam where friction holds
     // the approaching contact, and those cells say so.
     // The row μ = m_nn/m_nt = 0.5 is on the grid: for α ≥ 0 (g = h = 0 there) every node
-    // of it jams (`tests/impact_laws.rs::singular_w_with_g_and_h_zero_jams_under_every_law`);
+    // of it jams (`tests/all/impact_laws.rs::singular_w_with_g_and_h_zero_jams_under_every_law`);
     // for α < 0 the mirrored W has g, h > 0.
     let singular = ImpactMatrix::new(0.25, 0.5, 1.0);
     let m = map(

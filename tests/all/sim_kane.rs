@@ -2,7 +2,7 @@
 //! `scenes/kane_double_pendulum.toml` → model → contact frame (parry2d) → `W = J M⁻¹ Jᵀ` →
 //! impact law → `Δu` (Eq. 16), for the ten rows of [P] Table 2.
 //!
-//! Two independent references: the closed-form pendulum of `tests/common` (its own `M`,
+//! Two independent references: the closed-form pendulum of `common::paper` (its own `M`,
 //! `J`, and the impact law on that `W`), to 1e-12; and the printed table, to one unit in
 //! the last printed digit (with the print errors of `tests/golden/paper_table_2.toml`
 //! checked against the closed form instead).

@@ -344,7 +344,7 @@ fn every_message_validates_against_the_schema_in_the_file() {
             let file = match schema.name.as_str() {
                 "ricochet.State" => "schemas/ricochet/State.json",
                 "ricochet.Impact" => "schemas/ricochet/Impact.json",
-                // Protobuf: the Foxglove SDK's descriptors (tests/log.rs checks them).
+                // Protobuf: the Foxglove SDK's descriptors (tests/all/log.rs checks them).
                 _ => continue,
             };
             // The embedded schema is the shipped file, byte for byte.

@@ -239,8 +239,8 @@ fn spinning_drops_find_every_first_contact_on_time() {
     drops(2000, None);
 }
 
-/// Ten times as many drops (5 s in release): `cargo test --release --test spin_drops --
-/// --ignored`. `SPIN_DROPS=n` runs `n` drops instead; `SPIN_DROP=k` runs drop `k` of the
+/// Ten times as many drops (5 s in release): `cargo test --release --test all spin_drops::
+/// -- --ignored`. `SPIN_DROPS=n` runs `n` drops instead; `SPIN_DROP=k` runs drop `k` of the
 /// sequence alone and prints its scene.
 #[test]
 #[ignore]

@@ -1,4 +1,4 @@
-//! Checks of MCAP files (shared by the log and repair tests, included with `#[path]`).
+//! Checks of MCAP files (shared by the log and repair tests).
 //! Readers that bundle `@mcap/core` before 2025 (Foxglove Studio 1.48 among them) throw
 //! "Chunks without message indexes are not currently supported" on a chunk whose index
 //! lists no message index.

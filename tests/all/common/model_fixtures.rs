@@ -1,6 +1,5 @@
-//! Models and random numbers shared by the model, kinematics and dynamics tests (included
-//! with `#[path = "model_fixtures.rs"] mod fixtures;`). As a test target of its own it
-//! holds no test.
+//! Models and random numbers shared by the model, kinematics and dynamics tests
+//! (`use crate::common::model_fixtures as fixtures;`).
 #![allow(dead_code)]
 
 use ricochet::math::{Pose, Real, Vec2};

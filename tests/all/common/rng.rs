@@ -1,6 +1,6 @@
 //! A small deterministic generator (xorshift64*) for randomized tests, so that every run
-//! sees the same problems and needs no dependency (include it with
-//! `#[path = "common/rng.rs"] mod rng;`). Each test uses part of it.
+//! sees the same problems and needs no dependency (`use crate::common::rng;`). Each test
+//! uses part of it.
 #![allow(dead_code)]
 
 /// xorshift64* with its state.

@@ -1,5 +1,5 @@
 //! A `Write + Seek` whose bytes can be looked at while a writer owns it (shared by the
-//! log tests, included with `#[path]`).
+//! log tests).
 
 use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::sync::{Arc, Mutex};
