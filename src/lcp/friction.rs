@@ -151,8 +151,18 @@ pub enum LcpError {
 /// [`conditions_violation`]).
 pub const CHECK_TOL: Real = 1e-7;
 
-/// The other covering vectors tried when Lemke's path with `d = 1` ends on a ray on a
-/// problem with a known slip ([`Solver::solve`]).
+/// Lemke's solutions that miss their modes' conditions by more than this (relative, see
+/// [`conditions_violation`]) are polished: their modes' forces solved again from the
+/// modes' own linear system.
+pub const POLISH_TOL: Real = 1e-12;
+
+/// The other covering vectors tried when Lemke's path with `d = 1` fails
+/// ([`Solver::solve`]): a ray on a problem with a known slip (not copositive: the ray
+/// proves nothing) or without (where a ray is rounding's, the module doc: the 32-link
+/// chain's 28-point impact ended on a ray after 67 pivots along `d = 1` and was solved
+/// along the first other vector, to 1.4e-16), the pivot limit (a cycle by rounding), or
+/// a solution whose modes miss their conditions after the polish and the repair (the
+/// 45-point impact at t = 2.33 s, 1.2e-3); `tests/all/lcp_lemke.rs`.
 pub const RETRIES: usize = 8;
 
 /// How a contact enters the LCP.
@@ -224,39 +234,65 @@ impl Solver {
         let sa = a.amax();
         let sa = if sa > 0.0 { sa } else { 1.0 };
         self.assemble(a, b, allowed, k, sa);
-        let status = self.lemke_paths(allowed, k)?;
-        match status {
-            LemkeStatus::Solved { .. } => {}
-            LemkeStatus::RayTermination { .. } => {
-                let known_slip = allowed.iter().any(|c| c.slip.is_some());
-                // With every slip unknown a ray is rounding's (the module doc): the
-                // repair from the pressed points may still find the solution.
-                if !known_slip
-                    && let Some(sol) = repair::repair(a, b, allowed, &repair::start(b, allowed))
-                {
-                    return Ok(sol);
+        let known_slip = allowed.iter().any(|c| c.slip.is_some());
+        let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+        self.pivots = 0;
+        // How the paths failed: the least violation of a solved path that missed its
+        // conditions, and whether the last other one hit the pivot limit.
+        let mut inaccurate: Option<Real> = None;
+        let mut limit = false;
+        for attempt in 0..=RETRIES {
+            match self.lemke_path(allowed, k, attempt, &mut seed)? {
+                LemkeStatus::Solved { .. } => {
+                    let (sol, violation) = self.polished(a, b, allowed);
+                    if violation <= CHECK_TOL {
+                        return Ok(sol);
+                    }
+                    // Lemke's modes wrong at a few points: single mode changes from them.
+                    if let Some(p) = repair::repair(a, b, allowed, &sol.modes) {
+                        return Ok(p);
+                    }
+                    inaccurate = Some(inaccurate.map_or(violation, |v| v.min(violation)));
                 }
-                return Err(LcpError::NoSolution {
-                    pivots: self.pivots,
-                    known_slip,
-                });
-            }
-            LemkeStatus::PivotLimit { .. } => {
-                if let Some(sol) = repair::repair(a, b, allowed, &repair::start(b, allowed)) {
-                    return Ok(sol);
-                }
-                return Err(LcpError::PivotLimit {
-                    pivots: self.pivots,
-                });
+                LemkeStatus::RayTermination { .. } => limit = false,
+                LemkeStatus::PivotLimit { .. } => limit = true,
             }
         }
+        // Every path failed. With every slip unknown a ray is rounding's (the module doc),
+        // and so is a cycle: the repair from the pressed points may still find the
+        // solution.
+        if (inaccurate.is_some() || limit || !known_slip)
+            && let Some(sol) = repair::repair(a, b, allowed, &repair::start(b, allowed))
+        {
+            return Ok(sol);
+        }
+        Err(match inaccurate {
+            Some(violation) => LcpError::Inaccurate { violation },
+            None if limit => LcpError::PivotLimit {
+                pivots: self.pivots,
+            },
+            None => LcpError::NoSolution {
+                pivots: self.pivots,
+                known_slip,
+            },
+        })
+    }
+
+    /// The solution at the end of a solved Lemke path, polished where it misses its
+    /// modes' conditions by more than [`POLISH_TOL`]: Lemke's modes (the active set) are
+    /// right where its pivots' rounding is not (ill-conditioned bases of redundant points:
+    /// 9e-7 on the 32-link chain lying on the floor); the forces of those modes from their
+    /// own linear system ([`super::forces`]) meet the conditions to rounding. With its
+    /// violation.
+    fn polished(
+        &self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+    ) -> (Solution, Real) {
         let mut sol = self.modes(a, b, allowed);
         let mut violation = conditions_violation(a, b, allowed, &sol);
-        if violation > CHECK_TOL {
-            // Polish: Lemke's modes (the active set) are right where its pivots' rounding
-            // is not (ill-conditioned bases of redundant points: 9e-7 on the 32-link chain
-            // lying on the floor); the forces of those modes from their own linear system
-            // ([`super::forces`]) meet the conditions to rounding.
+        if violation > POLISH_TOL {
             let mu: Vec<Real> = allowed.iter().map(|c| c.mu).collect();
             if let Some(p) = super::forces(a, b, &mu, &sol.modes) {
                 let v = conditions_violation(a, b, allowed, &p);
@@ -265,64 +301,51 @@ impl Solver {
                 }
             }
         }
-        if violation > CHECK_TOL {
-            // Lemke's modes wrong at a few points: single mode changes from them.
-            if let Some(p) = repair::repair(a, b, allowed, &sol.modes) {
-                return Ok(p);
-            }
-            return Err(LcpError::Inaccurate { violation });
-        }
-        Ok(sol)
+        (sol, violation)
     }
 
-    /// Runs Lemke's algorithm on the assembled LCP of size `k`: with `d = 1`, then, if that
-    /// ends on a ray and a contact has a known slip (the LCP matrix is then not copositive:
-    /// Painlevé's case), along [`RETRIES`] other covering vectors, a fixed pseudo-random
-    /// sequence with entries in [0.01, 100]. Counts the pivots of all runs.
-    fn lemke_paths(&mut self, allowed: &[Allowed], k: usize) -> Result<LemkeStatus, LcpError> {
+    /// Runs Lemke's algorithm on the assembled LCP of size `k` along the covering vector of
+    /// `attempt`: `d = 1` first, then (after a ray, the pivot limit, or a solution that
+    /// misses its conditions) [`RETRIES`] others, a fixed pseudo-random sequence with
+    /// entries in [0.01, 100] drawn from `seed`. Adds its pivots to `self.pivots`.
+    fn lemke_path(
+        &mut self,
+        allowed: &[Allowed],
+        k: usize,
+        attempt: usize,
+        seed: &mut u64,
+    ) -> Result<LemkeStatus, LcpError> {
         let m = DMatrixView::from_slice(&self.m[..k * k], k, k);
         let q = DVectorView::from_slice(&self.q[..k], k);
-        let not_copositive = allowed.iter().any(|c| c.slip.is_some());
-        let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
-        self.pivots = 0;
-        let mut attempt = 0;
-        loop {
-            let d = if attempt == 0 {
-                None
-            } else {
-                self.cover.clear();
-                for _ in 0..k {
-                    // xorshift64*: uniform u in [0, 1), d = 10^(4u − 2).
-                    seed ^= seed >> 12;
-                    seed ^= seed << 25;
-                    seed ^= seed >> 27;
-                    let u = (seed.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as Real
-                        / (1u64 << 53) as Real;
-                    self.cover.push((10.0 as Real).powf(4.0 * u - 2.0));
-                }
-                Some(&self.cover[..])
-            };
-            let status = self.lemke.solve_covered(&m, &q, d).map_err(|e| match e {
-                LemkeError::Shape { rows, cols, q } => LcpError::Shape {
-                    rows,
-                    cols,
-                    b: q,
-                    contacts: allowed.len(),
-                },
-                LemkeError::NotFinite | LemkeError::Cover => LcpError::NotFinite,
-            })?;
-            let (LemkeStatus::Solved { pivots }
-            | LemkeStatus::RayTermination { pivots }
-            | LemkeStatus::PivotLimit { pivots }) = status;
-            self.pivots += pivots;
-            attempt += 1;
-            let retry = matches!(status, LemkeStatus::RayTermination { .. })
-                && not_copositive
-                && attempt <= RETRIES;
-            if !retry {
-                return Ok(status);
+        let d = if attempt == 0 {
+            None
+        } else {
+            self.cover.clear();
+            for _ in 0..k {
+                // xorshift64*: uniform u in [0, 1), d = 10^(4u − 2).
+                *seed ^= *seed >> 12;
+                *seed ^= *seed << 25;
+                *seed ^= *seed >> 27;
+                let u =
+                    (seed.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as Real / (1u64 << 53) as Real;
+                self.cover.push((10.0 as Real).powf(4.0 * u - 2.0));
             }
-        }
+            Some(&self.cover[..])
+        };
+        let status = self.lemke.solve_covered(&m, &q, d).map_err(|e| match e {
+            LemkeError::Shape { rows, cols, q } => LcpError::Shape {
+                rows,
+                cols,
+                b: q,
+                contacts: allowed.len(),
+            },
+            LemkeError::NotFinite | LemkeError::Cover => LcpError::NotFinite,
+        })?;
+        let (LemkeStatus::Solved { pivots }
+        | LemkeStatus::RayTermination { pivots }
+        | LemkeStatus::PivotLimit { pivots }) = status;
+        self.pivots += pivots;
+        Ok(status)
     }
 
     /// Checks the sizes and the contacts' data.

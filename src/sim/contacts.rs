@@ -251,18 +251,26 @@ impl Simulation<'_> {
         if now > count {
             return;
         }
-        self.disarmed[pair.index()] = true;
         // A contact separating at v is clear of the tolerance after 10 gap_tol / v: steps no
-        // longer than that see it close again. A grazing one (v ≈ 0) separates by its
-        // acceleration; the steps are left as they are.
+        // longer than that see it close again, while this pair stays disarmed. A grazing
+        // one (v ≈ 0) separates by its acceleration; the steps are left as they are.
         let v = (touching.iter())
             .filter(|p| p.pair == pair && p.v_n > p.still)
             .map(|p| p.v_n)
             .fold(Real::INFINITY, Real::min);
-        if v.is_finite() {
-            let h = 10.0 * self.scales.gap_tol / v;
-            self.h_max_base = h.min(self.settings.integrator.h_max);
-        }
+        let cap = if v.is_finite() {
+            10.0 * self.scales.gap_tol / v
+        } else {
+            Real::INFINITY
+        };
+        // Its event moves below the gap it has now, by the tolerance: an open point at
+        // rest at a hinge drifts by ~1e-11 m and must not stop the run each time.
+        let gap = self
+            .gaps
+            .open_gap(pair, self.stepper.t(), self.stepper.y())
+            .unwrap_or(0.0);
+        let floor = gap.min(0.0) - self.scales.gap_tol;
+        self.disarmed[pair.index()] = Some(super::Disarm { cap, floor });
         self.arm();
     }
 

@@ -23,6 +23,7 @@ pub const SLOTS: usize = 7;
 /// |---|---|---|---|
 /// | 0 | the signed gap (m) | no point of the pair is closed | an impact |
 /// | 0 | the gap at the pair's other point (m) | one point is closed | an impact there |
+/// | 0 | the gap (or the other point's) `− floor` | the gap event is disarmed | it sinks |
 /// | 1 + 3j | `λ_n` of closed point j (N) | point j is closed | lift-off |
 /// | 2 + 3j | `μ λ_n − |λ_t|` (N) | point j sticks | it starts to slip |
 /// | 2 + 3j | `s V_t` (m/s) | point j slides with slip s | the slip stops |
@@ -54,6 +55,10 @@ pub struct GapFunctions<'m> {
     /// The candidate pairs of the step, in pair order: the pairs whose functions are
     /// evaluated (see [`slot`]).
     pub candidates: Vec<PairId>,
+    /// The pairs whose gap event is disarmed (in pair order), with the floor of each: their
+    /// slot 0 is `gap − floor`, an event only when the gap sinks below `floor ≤ −gap_tol`
+    /// (see `Simulation::arm`).
+    pub disarmed: Vec<(PairId, Real)>,
 }
 
 impl<'m> GapFunctions<'m> {
@@ -66,6 +71,7 @@ impl<'m> GapFunctions<'m> {
             scratch: PointScratch::new(model),
             scales,
             candidates: Vec::new(),
+            disarmed: Vec::new(),
         }
     }
 
@@ -167,7 +173,12 @@ impl EventFunctions for GapFunctions<'_> {
                 .accelerate(model, &mut self.data, (t, q, u))?;
         }
         for r in 0..self.candidates.len() {
-            g[SLOTS * r] = self.open_gap_here(self.candidates[r], t)?;
+            let pair = self.candidates[r];
+            let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
+                Ok(k) => self.disarmed[k].1,
+                Err(_) => 0.0,
+            };
+            g[SLOTS * r] = self.open_gap_here(pair, t)? - floor;
         }
         for i in 0..self.persistent.closed().len() {
             let c = self.persistent.closed()[i];

@@ -62,6 +62,18 @@ use accumulation::Guard;
 /// near contact (see `Simulation::list_pairs`).
 pub const LISTED_PAIRS: usize = 1000;
 
+/// A gap event disarmed after a crossing that closed nothing (see
+/// `disarm_open_crossing`): armed again, normally, once the gap is clearly open.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Disarm {
+    /// The step cap while disarmed (s): steps short enough to see a separating contact
+    /// close again (infinite for a grazing one).
+    cap: Real,
+    /// The gap (m, `≤ −gap_tol`) below which the point counts as sinking: the event
+    /// function is `gap − floor` meanwhile.
+    floor: Real,
+}
+
 /// A simulation of one model with its settings; [`Simulation::run`] runs it.
 pub struct Simulation<'m> {
     model: &'m Model,
@@ -80,8 +92,8 @@ pub struct Simulation<'m> {
     /// Armed event functions of the candidate pairs (see [`gaps::slot`]).
     armed: Vec<bool>,
     /// Pairs whose gap event is disarmed after a spurious crossing (rounding noise just
-    /// after an impact), until they are clearly open.
-    disarmed: PairMap<bool>,
+    /// after an impact), until they are clearly open (see `disarm_open_crossing`).
+    disarmed: PairMap<Option<Disarm>>,
     /// The mode of each pair, for the samples.
     modes: PairMap<PairMode>,
     /// The slip direction of each pair, for the samples (see [`Sample::slips`]).
@@ -107,9 +119,6 @@ pub struct Simulation<'m> {
     /// extrapolated end `t∞` of an accumulation (the samples before it show the old mode).
     passages: Vec<contacts::Passage>,
     guard: Guard,
-    /// The step cap before [`Self::cap_for_spin`]: the integrator's, or a shorter one
-    /// after a spurious crossing (see `disarm_open_crossing`).
-    h_max_base: Real,
     /// Samples per step of the event location.
     locator_samples: usize,
     /// The last choice among several consistent contact modes: its time, and how many
@@ -160,7 +169,7 @@ impl<'m> Simulation<'m> {
             coupling: coupling::Coupling::new(model),
             sampler: Data::new(model),
             armed: Vec::new(),
-            disarmed: PairMap::new(false),
+            disarmed: PairMap::new(None),
             modes: PairMap::new(PairMode::Free),
             slips: PairMap::new(0),
             last_separation: PairMap::new(None),
@@ -173,7 +182,6 @@ impl<'m> Simulation<'m> {
             listed_slips: Vec::new(),
             passages: Vec::new(),
             guard: Guard::new(),
-            h_max_base: settings.integrator.h_max,
             locator_samples: LocatorSettings::default().samples,
             indeterminate: (Real::NEG_INFINITY, 0),
             slip_starts: (Real::NEG_INFINITY, Vec::new()),
@@ -330,12 +338,11 @@ impl<'m> Simulation<'m> {
         }
         for pair in disarmed {
             let gap = self.gaps.open_gap(pair, t, self.stepper.y())?;
-            self.disarmed[pair.index()] = gap <= self.scales.gap_tol;
+            if gap > self.scales.gap_tol {
+                self.disarmed[pair.index()] = None;
+            }
         }
         self.disarmed.prune();
-        if self.disarmed.changed().next().is_none() {
-            self.h_max_base = self.settings.integrator.h_max;
-        }
         self.arm();
         Ok(())
     }
@@ -351,10 +358,20 @@ impl<'m> Simulation<'m> {
         self.armed.clear();
         self.armed.resize(gaps::SLOTS * candidates.len(), false);
         self.locator.set_len(self.armed.len());
+        // A disarmed pair's gap stays armed below its floor: its function is
+        // `gap − floor`. The gap of an end of a link lying at a hinge whose other end is
+        // closed is held at zero, and stays disarmed for good; when that hold goes (its
+        // neighbour slides off, the link turns) the point sank through the floor unseen
+        // (the 32-link chain: hinges 2.8 cm deep at 5 s).
         for (r, &pair) in candidates.iter().enumerate() {
             let on_pair = closed.iter().filter(|c| c.pair == pair).count();
-            self.armed[gaps::SLOTS * r] = on_pair < 2 && !self.disarmed[pair.index()];
+            self.armed[gaps::SLOTS * r] = on_pair < 2;
         }
+        self.gaps.disarmed.clear();
+        self.gaps.disarmed.extend(
+            (self.disarmed.changed())
+                .filter_map(|pair| Some((pair, self.disarmed[pair.index()]?.floor))),
+        );
         for (i, c) in closed.iter().enumerate() {
             let j = gaps::rank(&self.system.persistent, i);
             let Some(slot) = self.gaps.slot_of(c.pair, 0) else {
@@ -378,7 +395,7 @@ impl<'m> Simulation<'m> {
             update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
         }
         let h = self
-            .h_max_base
+            .h_max_base()
             .min(1.01 * broad::GROWTH * self.stepper.h_next());
         let (g, slack) = (self.model.gravity().length(), 10.0 * self.scales.gap_tol);
         broad::grown_boxes(self.model, &self.sampler, &mut self.boxes, |v| {
@@ -452,6 +469,17 @@ impl<'m> Simulation<'m> {
         ))
     }
 
+    /// The step cap before [`Self::cap_for_spin`]: the integrator's, or the shortest cap
+    /// of the pairs disarmed now (see `disarm_open_crossing`). Each cap lasts as long as
+    /// its own pair stays disarmed: a grazing pair held at a zero gap for good (the end of
+    /// a link lying on the floor at a hinge whose other link's end is closed) must not
+    /// keep the cap of a pair that separated long ago.
+    fn h_max_base(&self) -> Real {
+        (self.disarmed.changed())
+            .filter_map(|pair| Some(self.disarmed[pair.index()]?.cap))
+            .fold(self.settings.integrator.h_max, Real::min)
+    }
+
     /// Caps the next step so that the event location cannot miss a contact of a fast or
     /// fast-turning body. The location samples each gap `samples + 1` times a step and
     /// assumes at most one extremum between samples; a turning shape's gap oscillates with
@@ -474,7 +502,7 @@ impl<'m> Simulation<'m> {
     fn cap_for_spin(&mut self) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
-        let mut cap = self.h_max_base;
+        let mut cap = self.h_max_base();
         let samples = (self.locator_samples + 1) as Real;
         {
             let y = self.stepper.y();

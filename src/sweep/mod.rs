@@ -3,7 +3,7 @@
 //!
 //! - [`spec`]: one parameter, `name=start:stop:step` (`value_k = start + k·step`, the
 //!   stop inclusive within [`spec::RANGE_TOLERANCE`] steps) or `name=v1,v2,…`. The
-//!   parameters: `e`, `mu`, `law`, `method`, `t_end`, `rtol`, `atol`, `dt`, `h_max`, and
+//!   parameters: `e`, `mu`, `law`, `method`, `simultaneous`, `t_end`, `rtol`, `atol`, `dt`, `h_max`, and
 //!   the initial state by coordinate name, `q0.<coordinate>`, `u0.<coordinate>`
 //!   (`q0.ball.y`).
 //! - [`grid`]: the Cartesian product (the first parameter varies slowest; the run index is

@@ -5,6 +5,7 @@ use std::fmt;
 use crate::impact::Law;
 use crate::integrate::Method;
 use crate::math::Real;
+use crate::settings::Simultaneous;
 
 use super::SpecError;
 
@@ -27,6 +28,9 @@ pub enum Param {
     Law,
     /// `method`: integration method (`dopri5`, `dop853`, `rk4`, `moreau-jean`); lists only.
     Method,
+    /// `simultaneous`: the rule for simultaneous impacts (`generalized-newton`,
+    /// `sequential`); lists only.
+    Simultaneous,
     /// `t_end`: end time (s), > 0.
     TEnd,
     /// `rtol`: relative tolerance of DOPRI5, > 0.
@@ -45,7 +49,7 @@ pub enum Param {
 }
 
 /// The names of the parameters, for messages.
-pub const PARAM_NAMES: &str = "e, mu, law, method, t_end, rtol, atol, dt, h_max, \
+pub const PARAM_NAMES: &str = "e, mu, law, method, simultaneous, t_end, rtol, atol, dt, h_max, \
                                q0.<coordinate>, u0.<coordinate>";
 
 impl Param {
@@ -56,6 +60,7 @@ impl Param {
             "mu" => Param::Mu,
             "law" => Param::Law,
             "method" => Param::Method,
+            "simultaneous" => Param::Simultaneous,
             "t_end" => Param::TEnd,
             "rtol" => Param::Rtol,
             "atol" => Param::Atol,
@@ -73,9 +78,9 @@ impl Param {
         })
     }
 
-    /// Whether the values are names (`law`, `method`) rather than numbers.
+    /// Whether the values are names (`law`, `method`, `simultaneous`) rather than numbers.
     fn is_named(&self) -> bool {
-        matches!(self, Param::Law | Param::Method)
+        matches!(self, Param::Law | Param::Method | Param::Simultaneous)
     }
 
     /// Why the number `v` is not a value of this parameter, if it is not.
@@ -87,7 +92,7 @@ impl Param {
                 (!(v.is_finite() && v > 0.0)).then_some("must be finite and > 0")
             }
             Param::Q0(_) | Param::U0(_) => (!v.is_finite()).then_some("must be finite"),
-            Param::Law | Param::Method => Some("takes names, not numbers"),
+            Param::Law | Param::Method | Param::Simultaneous => Some("takes names, not numbers"),
         }
     }
 }
@@ -99,6 +104,7 @@ impl fmt::Display for Param {
             Param::Mu => f.write_str("mu"),
             Param::Law => f.write_str("law"),
             Param::Method => f.write_str("method"),
+            Param::Simultaneous => f.write_str("simultaneous"),
             Param::TEnd => f.write_str("t_end"),
             Param::Rtol => f.write_str("rtol"),
             Param::Atol => f.write_str("atol"),
@@ -119,6 +125,8 @@ pub enum Value {
     Law(Law),
     /// An integration method.
     Method(Method),
+    /// A rule for simultaneous impacts.
+    Simultaneous(Simultaneous),
 }
 
 impl fmt::Display for Value {
@@ -128,6 +136,7 @@ impl fmt::Display for Value {
             Value::Real(x) => f.write_str(&format_real(*x)),
             Value::Law(l) => f.write_str(l.name()),
             Value::Method(m) => f.write_str(m.name()),
+            Value::Simultaneous(r) => f.write_str(r.name()),
         }
     }
 }
@@ -253,6 +262,9 @@ impl ParamSpec {
                     Param::Law => Value::Law(t.parse().map_err(|e| malformed(format!("{e}")))?),
                     Param::Method => {
                         Value::Method(t.parse().map_err(|e| malformed(format!("{e}")))?)
+                    }
+                    Param::Simultaneous => {
+                        Value::Simultaneous(t.parse().map_err(|e| malformed(format!("{e}")))?)
                     }
                     _ => Value::Real(number(t)?),
                 });

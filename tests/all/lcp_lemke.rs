@@ -504,21 +504,41 @@ fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
 /// Anitescu and Potra's theorem excludes (module `lcp::friction`): now solved, and the
 /// solution satisfies the table's conditions to rounding. The 16-link chain's 11-point
 /// impact at t = 0.9196 s (`tests/all/sim_persistent.rs`'s run) ended `Inaccurate` (1.4e-2:
-/// a pivot on a rounding zero, `lcp::lemke::CANCEL_TOL`).
+/// a pivot on a rounding zero, `lcp::lemke::CANCEL_TOL`). Two impacts of the 32-link chain
+/// that stopped it later (t = 0.5644 s and 1.1228 s, 28 and 29 points): a ray along the
+/// covering vector d = 1 after 67 pivots, and the pivot limit along it; both solved along
+/// the next covering vector (`lcp::RETRIES`).
 #[test]
 fn the_chain_of_32_links_on_the_floor_is_solved() {
-    for (name, text) in [
+    for (name, text, tol) in [
         (
             "6 contacts",
             include_str!("../data/lcp/chain32_6_contacts.txt"),
+            1e-12,
         ),
         (
             "8 contacts",
             include_str!("../data/lcp/chain32_8_contacts.txt"),
+            1e-12,
         ),
         (
             "16 links, 11 contacts",
             include_str!("../data/lcp/chain16_11_contacts.txt"),
+            1e-12,
+        ),
+        (
+            "28 contacts",
+            include_str!("../data/lcp/chain32_28_contacts.txt"),
+            1e-12,
+        ),
+        // Lemke's path along d = 1 reaches its pivot limit (5,800) on this one; the path
+        // along the first other covering vector ends in 103 pivots, with four points
+        // approaching at b_n ≈ −7e-12 m/s (relative 2.8e-10) left open: met to the
+        // solver's check, lcp::CHECK_TOL, not to 1e-12.
+        (
+            "29 contacts",
+            include_str!("../data/lcp/chain32_29_contacts_pivots.txt"),
+            lcp::CHECK_TOL,
         ),
     ] {
         let (a, b, allowed) = dumped(text);
@@ -532,7 +552,7 @@ fn the_chain_of_32_links_on_the_floor_is_solved() {
             solver.pivots(),
             sol.modes
         );
-        assert!(v <= 1e-12, "{name}: {v:e}");
+        assert!(v <= tol, "{name}: {v:e}");
         // A second method: Lemke's w is one of the enumeration's (9 solutions on the
         // 6 contacts; 4⁸ systems are too many for the 8).
         if allowed.len() <= lcp::MAX_ENUMERATED {

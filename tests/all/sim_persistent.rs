@@ -573,3 +573,71 @@ fn a_chain_of_16_links_gets_past_an_impact_of_more_than_six_points() {
         summary.stop
     );
 }
+
+/// The 32-link chain falling on the floor (issue 15; `tests/data/chain_floor.toml`: links of
+/// 0.1 m, 50 g, capsules of radius 1 cm, e = 0.2, μ = 0.4, released horizontally 1 m above
+/// the floor), to 1.2 s: past two impacts that stopped it (t = 0.5644 s, 28 points: Lemke's
+/// ray along d = 1; t = 1.1228 s, 29 points: its pivot limit — both solved along the next
+/// covering vector) and past the links coming to lie on the floor (from 0.56 s), where the
+/// steps shrank to 1.6e-6 s and stayed there: the step cap of one pair whose gap event was
+/// disarmed after it separated (10 gap_tol / v) was kept as long as *any* pair stayed
+/// disarmed, and the end of a link lying at a hinge whose other end is closed stays
+/// disarmed for good (its gap is held at zero). Before: 46,851 steps to 0.63 s, 119,007 to
+/// 0.744 s; now each cap lasts as long as its own pair's disarm: 3,939 steps to 1.2 s.
+///
+/// And no hinge sinks into the floor: the end of a link held at a zero gap by its
+/// neighbour's closed point had its gap event disarmed for good, and when the hold went it
+/// sank unseen (1.1e-5 m below the floor at t = 0.5077 s, 2.8 cm by 5 s; the potential
+/// energy then fell below the floor's lower bound). Its event now stays armed below the
+/// gap it had (`Disarm::floor`): at every sample every hinge is above the floor's level
+/// (the capsules' axis at y = −0.99 m) to 1e-9 m.
+#[test]
+fn a_chain_of_32_links_lands_and_lies_on_the_floor_in_few_steps() {
+    let path = format!("{}/tests/data/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
+    let mut scene = ricochet::scene::load(&path).unwrap();
+    scene.settings.t_end = 1.2;
+    let (rec, summary, _) = run(&scene, MaterialOverride::default());
+    println!(
+        "{}; {} impacts, {} steps",
+        summary.stop,
+        rec.impacts.len(),
+        summary.counters.steps
+    );
+    assert!(
+        matches!(summary.stop, StopReason::EndTime),
+        "{}",
+        summary.stop
+    );
+    for ev in rec
+        .impacts
+        .iter()
+        .filter(|ev| ev.cause == ImpactCause::Simultaneous)
+    {
+        let scale = ev.v_a.n.abs().max(1e-3);
+        assert!(ev.outcome.impulse.n >= 0.0, "{ev:?}");
+        assert!(
+            ev.outcome.v_s.n + ev.material.e * ev.v_a.n >= -1e-6 * scale,
+            "{ev:?}"
+        );
+    }
+    assert!(
+        summary.counters.steps < 20_000,
+        "{}",
+        summary.counters.steps
+    );
+    // Every hinge and the free end above the floor: link k at the absolute angle
+    // θ_k = Σ_{j≤k} q_j from the downward vertical, 0.1 m long, from the pivot at y = 0.
+    let mut lowest = (0.0, f64::INFINITY);
+    for (t, q, _, _) in &rec.samples {
+        let (mut theta, mut y) = (0.0, 0.0);
+        for qk in q.iter() {
+            theta += qk;
+            y -= 0.1 * theta.cos();
+            if y < lowest.1 {
+                lowest = (*t, y);
+            }
+        }
+    }
+    println!("lowest hinge: y = {} m at t = {} s", lowest.1, lowest.0);
+    assert!(lowest.1 >= -0.99 - 1e-9, "{lowest:?}");
+}

@@ -581,3 +581,55 @@ fn the_command_line_sweeps_shards_and_merges() {
         assert!(!dir.join("x.csv").exists());
     }
 }
+
+/// `simultaneous` is a sweep parameter (issue 15: the rule for simultaneous impacts is a
+/// per-scene choice; a sweep compares them). Newton's cradle, 0.08 s after the first ball
+/// strikes the row: every row is a separate run with the same rule (bit for bit), and the
+/// rows show what the scene file says of each rule — sequential: balls 1–4 at rest, ball 5
+/// swings out; generalized Newton: balls 3–5 leave together, ball 2 stops after striking
+/// ball 1, which swings back as fast as the three (the same pendulums from the same speed).
+#[test]
+fn a_sweep_over_the_simultaneous_rule_gives_each_rule_s_cradle() {
+    let s = scene("newtons_cradle");
+    let grid = Grid::new(vec![
+        ParamSpec::parse("simultaneous=generalized-newton,sequential").unwrap(),
+        ParamSpec::parse("t_end=0.4").unwrap(),
+    ])
+    .unwrap();
+    assert_eq!(
+        grid.params()[0].canonical(),
+        "simultaneous=generalized-newton,sequential"
+    );
+    let sweep = Sweep::new(&s, grid).unwrap();
+    let rows = sweep
+        .run(Shard::ALL, NonZeroUsize::new(2), &|_| {})
+        .unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in &rows {
+        let Value::Simultaneous(rule) = row.values[0] else {
+            panic!("{:?}", row.values[0])
+        };
+        let got = row.outcome.as_ref().unwrap();
+        assert_eq!(got.stop, "t_end");
+        let mut settings = s.settings.clone();
+        settings.t_end = 0.4;
+        settings.simultaneous = rule;
+        let mut sim = Simulation::new(&s.model, &settings, MaterialOverride::default()).unwrap();
+        let single = RunResult::from(sim.run(&s.initial, &mut NullObserver, None));
+        assert_eq!(got, &single, "{rule:?}");
+        let u = &got.state.u;
+        println!("{}: u = {u:?}", rule.name());
+        assert!(u[4] > 0.5, "{u:?}");
+        match rule {
+            ricochet::settings::Simultaneous::Sequential => {
+                assert!(u.rows(0, 4).iter().all(|w| w.abs() < 1e-9), "{u:?}");
+            }
+            ricochet::settings::Simultaneous::GeneralizedNewton => {
+                assert!(u[1].abs() < 1e-9, "{u:?}");
+                assert!((u[2] - u[4]).abs() < 1e-9 && (u[3] - u[4]).abs() < 1e-9);
+                assert!((u[0] + u[4]).abs() < 1e-6 * u[4], "{u:?}");
+            }
+        }
+    }
+    assert!(ParamSpec::parse("simultaneous=both").is_err());
+}

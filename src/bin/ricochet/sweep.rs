@@ -26,8 +26,8 @@ pub struct Args {
     #[arg(required = true, num_args = 1..)]
     inputs: Vec<PathBuf>,
     /// A swept parameter, `name=start:stop:step` (stop inclusive) or `name=v1,v2,…`;
-    /// repeat for a grid (the first varies slowest). Names: e, mu, law, method, t_end,
-    /// rtol, atol, dt, h_max, q0.<coordinate>, u0.<coordinate>.
+    /// repeat for a grid (the first varies slowest). Names: e, mu, law, method,
+    /// simultaneous, t_end, rtol, atol, dt, h_max, q0.<coordinate>, u0.<coordinate>.
     #[arg(short, long = "param", value_name = "SPEC", conflicts_with = "merge")]
     params: Vec<String>,
     /// Run only the share i/N of the grid (the runs whose index is i modulo N), e.g.
