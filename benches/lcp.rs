@@ -5,7 +5,7 @@
 //! impact's problem. Fixed seed.
 //!
 //! `lemke_resting`: problems shaped like a chain lying on the floor (issue 15; as
-//! `resting_problem` of `tests/lcp_lemke.rs`): `A` rank deficient (`d = 3n/2`), every
+//! `resting_problem` of `tests/all/lcp_lemke.rs`): `A` rank deficient (`d = 3n/2`), every
 //! other contact a duplicate of its neighbour's normal row, `b_n = 0` but for one point in
 //! five, `b_t` random, `μ` in [0, 1], slips unknown.
 

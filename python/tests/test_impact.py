@@ -17,9 +17,10 @@ from conftest import REPO, run_cli
 
 
 def pendulum() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The double pendulum of [P, Sect. 5] in closed form (as tests/common/mod.rs builds
-    it, independently of the simulator): two uniform rods, m = 3 kg, l = 2 m, absolute
-    angles 20° and 30°, u = (−0.1, −0.2) rad/s, the tip of rod B on a horizontal floor.
+    """The double pendulum of [P, Sect. 5] in closed form (as tests/all/common/paper.rs
+    builds it, independently of the simulator): two uniform rods, m = 3 kg, l = 2 m,
+    absolute angles 20° and 30°, u = (−0.1, −0.2) rad/s, the tip of rod B on a horizontal
+    floor.
     Returns M, J (rows J_n, J_t), W = J M⁻¹ Jᵀ and v^A = J u."""
     m, l = 3.0, 2.0
     q1, q2 = math.radians(20.0), math.radians(30.0)

@@ -234,7 +234,7 @@ fn closest_points_fallback(
                 let mut c = super::penetration::penetration(pose_a, sa, pose_b, sb, &normals);
                 // The support points along the minimizing direction need not touch: a
                 // segment crossing the thin end face of a box has its far end deepest
-                // along that face's normal (drop 7509 of tests/spin_drops.rs: the witness
+                // along that face's normal (drop 7509 of tests/all/spin_drops.rs: the witness
                 // 0.41 m from the contact, an impact taken at the wrong point).
                 refine_witnesses(
                     &mut c,

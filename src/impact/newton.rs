@@ -50,7 +50,7 @@ pub fn collision_type(
 ///   `v_t^S = [α − (1+e) r_m] V = v_t^A − (1+e) g V / h`.
 ///
 /// All three are derived again from Eqs. (22)–(23) and the phase conditions (46), (48),
-/// (51) in `tests/impact_laws.rs`, which checks Eqs. (22)–(23) on the result.
+/// (51) in `tests/all/impact_laws.rs`, which checks Eqs. (22)–(23) on the result.
 #[inline]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
     let (e, mu) = (pb.e, pb.mu);

@@ -63,7 +63,7 @@
 //! no solution exists either (`M` is not copositive-plus: a sliding solution may exist that
 //! the path misses). In floating point the path must also see exactly-zero basic values as
 //! zero; the rays the 32-link chain met (b_n = 0 at rest, two points at one hinge) were
-//! rounding (`lcp::lemke`, "Numerics"): `tests/lcp_lemke.rs` counts rays on 600 such
+//! rounding (`lcp::lemke`, "Numerics"): `tests/all/lcp_lemke.rs` counts rays on 600 such
 //! problems of up to 32 points (zero) and the misses on random ones.
 //!
 //! References: **[ST]** D. E. Stewart, J. C. Trinkle, *An implicit time-stepping scheme for
@@ -92,7 +92,7 @@ pub enum LcpError {
         /// A contact had a known slip: the LCP matrix is not copositive, and Lemke's rays
         /// (along `1 + RETRIES` covering vectors) do not prove that no solution exists
         /// (measured: 17 solvable problems of 8,000 random ones reported so, all with a
-        /// known slip; `tests/lcp_lemke.rs`).
+        /// known slip; `tests/all/lcp_lemke.rs`).
         known_slip: bool,
     },
     /// Lemke's algorithm reached its pivot limit.
@@ -162,7 +162,7 @@ pub const POLISH_TOL: Real = 1e-12;
 /// chain's 28-point impact ended on a ray after 67 pivots along `d = 1` and was solved
 /// along the first other vector, to 1.4e-16), the pivot limit (a cycle by rounding), or
 /// a solution whose modes miss their conditions after the polish and the repair (the
-/// 45-point impact at t = 2.33 s, 1.2e-3); `tests/lcp_lemke.rs`.
+/// 45-point impact at t = 2.33 s, 1.2e-3); `tests/all/lcp_lemke.rs`.
 pub const RETRIES: usize = 8;
 
 /// How a contact enters the LCP.

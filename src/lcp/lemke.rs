@@ -71,7 +71,7 @@ pub const PIVOT_TOL: Real = 1e-11;
 
 /// An entry `Σ_k B⁻¹_ik a_k` of a `z_j`'s entering column below this fraction of
 /// `Σ_k |B⁻¹_ik a_k|` is the rounding of a zero and is set to 0: pivoting on it makes `B`
-/// singular. The 16-link chain (an 11-point impact, `tests/lcp_lemke.rs`) pivoted on such
+/// singular. The 16-link chain (an 11-point impact, `tests/all/lcp_lemke.rs`) pivoted on such
 /// an entry, `1.1e-11` of its terms (`1.3e-11` of the column's largest, past
 /// [`PIVOT_TOL`]); `B⁻¹` grew to `3e10` and the "solution" had `w_n = −0.03`. Measured on
 /// that path: the rounding zeros reach `1.1e-11` of their terms, the smallest other entries

@@ -23,7 +23,7 @@
 //!    may stretch a step to land on the stop time) and beyond the step it suggests after
 //!    it (at most [`GROWTH`] times longer), which an impact's reset clips to the cap. So
 //!    the cap over the candidates gives the integrator the *same steps*, bit for bit, as
-//!    the cap over every pair did (`tests/broad_phase.rs` runs with and without it).
+//!    the cap over every pair did (`tests/all/broad_phase.rs` runs with and without it).
 //! 2. **After the step** (for the event location): each collider's box is grown to hold
 //!    also its boxes at the `k + 2` times where the locator samples the step (`k = 4`), each
 //!    grown by `V_c(t_j) Δ`, what the collider travels in a whole sample interval `Δ` at
@@ -55,7 +55,7 @@ pub(super) const GROWTH: Real = 10.0;
 /// circle (m) and its body's rotation rate `|ω|` (rad/s), at the positions and velocities of
 /// `data`: `V_c = |v_G| + |ω| (|c − G| + r)`, which holds as the body turns (the speed of
 /// the circle's centre alone changes by `|ω|` times its distance from the centre of mass
-/// within a step: drop 32460 of `tests/spin_drops.rs`). An obstacle: `(0, r, 0)`.
+/// within a step: drop 32460 of `tests/all/spin_drops.rs`). An obstacle: `(0, r, 0)`.
 pub(super) fn reach(model: &Model, data: &Data, c: ColliderId) -> (Real, Real, Real) {
     let collider = &model.colliders()[c.index()];
     let sphere = collider.shape.compute_local_bounding_sphere();

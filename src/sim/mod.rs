@@ -196,7 +196,7 @@ impl<'m> Simulation<'m> {
 
     /// Turns the broad phase off (`false`: every step samples the event functions of every
     /// pair, `O(n²)`, as before it existed) or on again (the default). With it off the
-    /// runs must be the same bit for bit: the oracle of `tests/broad_phase.rs`.
+    /// runs must be the same bit for bit: the oracle of `tests/all/broad_phase.rs`.
     pub fn set_broad_phase(&mut self, on: bool) {
         self.every_pair = (!on).then(|| self.model.pair_ids().collect());
     }

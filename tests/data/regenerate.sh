@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Regenerates tests/data/fixture.mcap, the synthetic run of tests/log.rs, written by the
+# Regenerates tests/data/fixture.mcap, the synthetic run of tests/all/log.rs, written by the
 # current LogWriter. Run it when the log format changes on purpose, and commit the result:
 #   bash tests/data/regenerate.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-cargo test --test log -- --ignored --exact regenerate_fixture --nocapture
+cargo test --test all -- --ignored --exact log::regenerate_fixture --nocapture

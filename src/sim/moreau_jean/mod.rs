@@ -25,7 +25,7 @@
 //!   force `f` (a free body under gravity), one step satisfies exactly
 //!   `E_{k+1} − E_k = Σ_i ½ P_i·(v_iᵏ + v_i^{k+1}) − (θ − ½) h fᵀ(u_{k+1} − u_k)`:
 //!   the work of the contact impulses, plus a term that vanishes for θ = ½ and telescopes
-//!   otherwise (`tests/moreau_jean.rs` checks both).
+//!   otherwise (`tests/all/moreau_jean.rs` checks both).
 //! - **Where things are evaluated**: everything at one point, the θ-point
 //!   `(t_θ, q_θ) = (t_k + θh, q_k + θh u_k)`: the mass matrix and its Cholesky factor, the
 //!   forces `τ − h` (with the speeds `u_k`: explicit in `u`), the gaps, the contact frames
