@@ -183,6 +183,52 @@ impl MassFactor {
         }
     }
 
+    /// `b ← F⁻¹ b` for the factor `F` of `M = F Fᵀ` (`F = Lᵀ` of the tree factor, `L` of
+    /// the dense one): half of [`Self::solve_in_place`], which is
+    /// [`Self::solve_factor_transpose_in_place`] after this. With `Y = F⁻¹ Jᵀ`,
+    /// `J M⁻¹ Jᵀ = Yᵀ Y` (one triangular solve per column of `Jᵀ`, not two, and a symmetric
+    /// product) and `M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ)`.
+    pub fn solve_factor_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
+        if !self.valid {
+            return Err(DynamicsError::NotFactored);
+        }
+        match &self.storage {
+            FactorStorage::Tree(l) => {
+                check_len("right-hand side", l.nrows(), b.len())?;
+                l.solve_lt(b);
+            }
+            FactorStorage::Dense { chol, n, .. } => {
+                let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
+                check_len("right-hand side", *n, b.len())?;
+                (chol.l_dirty())
+                    .solve_lower_triangular_unchecked_mut(&mut DVectorViewMut::from_slice(b, *n));
+            }
+        }
+        Ok(())
+    }
+
+    /// `y ← F⁻ᵀ y`, the other half of [`Self::solve_in_place`] (see
+    /// [`Self::solve_factor_in_place`]).
+    pub fn solve_factor_transpose_in_place(&self, y: &mut [Real]) -> Result<(), DynamicsError> {
+        if !self.valid {
+            return Err(DynamicsError::NotFactored);
+        }
+        match &self.storage {
+            FactorStorage::Tree(l) => {
+                check_len("right-hand side", l.nrows(), y.len())?;
+                l.solve_l(y);
+            }
+            FactorStorage::Dense { chol, n, .. } => {
+                let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
+                check_len("right-hand side", *n, y.len())?;
+                (chol.l_dirty()).ad_solve_lower_triangular_unchecked_mut(
+                    &mut DVectorViewMut::from_slice(y, *n),
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// Solves `M x = b` in place (`b` becomes `x`): `Lᵀ y = b` backward, then `L x = y`
     /// forward (`L y = b`, `Lᵀ x = y` for the dense factor).
     pub fn solve_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {

@@ -38,6 +38,8 @@ pub struct MinNorm {
     beta_t: Vec<Real>,
     /// The solution in pivoted order.
     z: Vec<Real>,
+    /// The norms of the columns' remaining parts while `R` is made.
+    norms: Vec<(Real, Real)>,
 }
 
 /// One Householder reflection `H = I − β v vᵀ` with `H x = α e₀`, for the entries `x` of
@@ -57,16 +59,35 @@ fn householder(x: impl Iterator<Item = Real> + Clone) -> (Real, Real, Real) {
     (alpha, v0, beta)
 }
 
+/// `Σ aᵢ bᵢ` over the shorter of `a` and `b`, in four lanes (which the compiler
+/// vectorizes; a plain `zip().sum()` is one serial chain of additions).
+pub(crate) fn dot(a: &[Real], b: &[Real]) -> Real {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let tail: Real = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
 /// Applies the reflection `H = I − β v vᵀ` of column `k` of `m` (`v = (v₀, m[k+1.., k])`)
-/// to rows `k..` of column `j` of `m`.
+/// to rows `k..` of column `j > k` of `m`.
 fn reflect_column(m: &mut DMatrix<Real>, k: usize, (v0, beta): (Real, Real), j: usize) {
+    debug_assert!(j > k);
     let rows = m.nrows();
-    let dot = v0 * m[(k, j)] + (k + 1..rows).map(|i| m[(i, k)] * m[(i, j)]).sum::<Real>();
-    let f = beta * dot;
-    m[(k, j)] -= f * v0;
-    for i in k + 1..rows {
-        let vi = m[(i, k)];
-        m[(i, j)] -= f * vi;
+    let (left, right) = m.as_mut_slice().split_at_mut(j * rows);
+    let v = &left[k * rows + k + 1..(k + 1) * rows];
+    let cj = &mut right[k..rows];
+    let f = beta * (v0 * cj[0] + dot(v, &cj[1..]));
+    cj[0] -= f * v0;
+    for (c, vi) in cj[1..].iter_mut().zip(v) {
+        *c -= f * vi;
     }
 }
 
@@ -74,11 +95,12 @@ fn reflect_column(m: &mut DMatrix<Real>, k: usize, (v0, beta): (Real, Real), j: 
 /// of `y`.
 fn reflect_vector(m: &DMatrix<Real>, k: usize, (v0, beta): (Real, Real), y: &mut [Real]) {
     let rows = m.nrows();
-    let dot = v0 * y[k] + (k + 1..rows).map(|i| m[(i, k)] * y[i]).sum::<Real>();
-    let f = beta * dot;
-    y[k] -= f * v0;
-    for i in k + 1..rows {
-        y[i] -= f * m[(i, k)];
+    let v = &m.as_slice()[k * rows + k + 1..(k + 1) * rows];
+    let y = &mut y[k..rows];
+    let f = beta * (v0 * y[0] + dot(v, &y[1..]));
+    y[0] -= f * v0;
+    for (c, vi) in y[1..].iter_mut().zip(v) {
+        *c -= f * vi;
     }
 }
 
@@ -106,24 +128,50 @@ impl MinNorm {
         self.c.extend(b.iter());
         self.perm.clear();
         self.perm.extend(0..n);
-        let first = (0..n).map(|j| self.r.column(j).norm()).fold(0.0, Real::max);
+        // The norms of the columns' remaining parts, downdated after each reflection
+        // (`(estimate, norm at its last computation)`, LAPACK's xLAQP2).
+        self.norms.clear();
+        for j in 0..n {
+            let col = &self.r.as_slice()[j * m..(j + 1) * m];
+            let norm = dot(col, col).sqrt();
+            self.norms.push((norm, norm));
+        }
+        let first = self.norms.iter().map(|v| v.0).fold(0.0, Real::max);
         let tol = m.max(n) as Real * Real::EPSILON * first;
         let mut rank = 0;
         for k in 0..m.min(n) {
-            // The column of largest remaining norm (recomputed: no downdating error).
-            let mut best = (k, -1.0);
-            for j in k..n {
-                let s: Real = (k..m).map(|i| self.r[(i, j)] * self.r[(i, j)]).sum();
-                if s > best.1 {
-                    best = (j, s);
+            // The column of largest remaining norm; the rank is decided on the computed
+            // norm, and if that is negligible, on every remaining column's computed norm
+            // (an estimate off by its downdating cannot end the factorization early).
+            let remaining = |r: &DMatrix<Real>, j: usize| {
+                let col = &r.as_slice()[j * m + k..(j + 1) * m];
+                dot(col, col).sqrt()
+            };
+            let mut best = (k..n).fold((k, -1.0), |best, j| {
+                if self.norms[j].0 > best.1 {
+                    (j, self.norms[j].0)
+                } else {
+                    best
                 }
-            }
-            if best.1.sqrt() <= tol {
-                break;
+            });
+            if remaining(&self.r, best.0) <= tol {
+                best = (k, -1.0);
+                for j in k..n {
+                    let norm = remaining(&self.r, j);
+                    self.norms[j] = (norm, norm);
+                    if norm > best.1 {
+                        best = (j, norm);
+                    }
+                }
+                if best.1 <= tol {
+                    break;
+                }
             }
             self.r.swap_columns(k, best.0);
             self.perm.swap(k, best.0);
-            let (alpha, v0, beta) = householder((k..m).map(|i| self.r[(i, k)]));
+            self.norms.swap(k, best.0);
+            let (alpha, v0, beta) =
+                householder(self.r.as_slice()[k * m + k..(k + 1) * m].iter().copied());
             // Apply H to the columns right of k and to c.
             for j in k + 1..n {
                 reflect_column(&mut self.r, k, (v0, beta), j);
@@ -131,6 +179,24 @@ impl MinNorm {
             reflect_vector(&self.r, k, (v0, beta), &mut self.c);
             self.r[(k, k)] = alpha;
             rank = k + 1;
+            // Downdate the norms by the entries now in row k; recompute one whose estimate
+            // lost too many digits to cancellation.
+            for j in k + 1..n {
+                let (estimate, computed) = self.norms[j];
+                if estimate == 0.0 {
+                    continue;
+                }
+                let ratio = self.r[(k, j)].abs() / estimate;
+                let shrink = (1.0 - ratio * ratio).max(0.0);
+                let lost = shrink * (estimate / computed) * (estimate / computed);
+                self.norms[j] = if lost <= Real::EPSILON.sqrt() {
+                    let col = &self.r.as_slice()[j * m + k + 1..(j + 1) * m];
+                    let norm = dot(col, col).sqrt();
+                    (norm, norm)
+                } else {
+                    (estimate * shrink.sqrt(), computed)
+                };
+            }
         }
         let r = rank;
         self.z.clear();
@@ -152,7 +218,8 @@ impl MinNorm {
             self.head_t.clear();
             self.beta_t.clear();
             for k in 0..r {
-                let (alpha, v0, beta) = householder((k..n).map(|i| self.t[(i, k)]));
+                let (alpha, v0, beta) =
+                    householder(self.t.as_slice()[k * n + k..(k + 1) * n].iter().copied());
                 for j in k + 1..r {
                     reflect_column(&mut self.t, k, (v0, beta), j);
                 }

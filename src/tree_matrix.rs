@@ -301,6 +301,13 @@ impl TreeMatrix {
     ///
     /// Cost: twice the number of entries. `b` must have length `n`.
     pub fn solve_ltl(&self, b: &mut [Real]) {
+        self.solve_lt(b);
+        self.solve_l(b);
+    }
+
+    /// Solves `Lᵀ y = b` in place (`b` becomes `y`), backward along the tree: the first
+    /// half of [`Self::solve_ltl`].
+    pub fn solve_lt(&self, b: &mut [Real]) {
         let p = &self.pattern;
         debug_assert_eq!(b.len(), p.len());
         for i in (0..p.len()).rev() {
@@ -313,6 +320,13 @@ impl TreeMatrix {
                 j = p.parent[j];
             }
         }
+    }
+
+    /// Solves `L x = y` in place (`y` becomes `x`), forward along the tree: the second
+    /// half of [`Self::solve_ltl`].
+    pub fn solve_l(&self, b: &mut [Real]) {
+        let p = &self.pattern;
+        debug_assert_eq!(b.len(), p.len());
         for i in 0..p.len() {
             let row = self.row(i);
             let mut s = b[i];

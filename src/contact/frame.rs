@@ -161,6 +161,26 @@ pub fn frame_at(
     })
 }
 
+/// The relative velocity `v^R` of the witness points of `contact` (the `v_r` of
+/// [`frame_at`]'s frame, the same numbers) without the Jacobian rows: for the velocity
+/// products of persistent contact, which difference velocities only. Requires
+/// [`crate::kinematics::update_velocities`].
+pub fn relative_velocity(
+    model: &Model,
+    data: &Data,
+    pair: PairId,
+    contact: &PairContact,
+) -> Result<Vec2, ContactError> {
+    let p = model
+        .pair(pair)
+        .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
+    let v = |collider: ColliderId, at: Vec2| match model.colliders()[collider.index()].body {
+        Some(body) => point_velocity(model, data, body, at).map(|v| v.total),
+        None => Ok(Vec2::ZERO),
+    };
+    Ok(v(p.a, contact.point_a)? - v(p.b, contact.point_b)?)
+}
+
 /// The velocity, remainder velocity and Jacobian of the point `p` of a collider's body;
 /// zeros for an obstacle of the world.
 fn side(

@@ -14,6 +14,8 @@ mod gap;
 mod manifold;
 mod penetration;
 
-pub use frame::{ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at};
+pub use frame::{
+    ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at, relative_velocity,
+};
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
 pub use manifold::{ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points};

@@ -59,6 +59,49 @@ pub struct GapFunctions<'m> {
     /// slot 0 is `gap − floor`, an event only when the gap sinks below `floor ≤ −gap_tol`
     /// (see `Simulation::arm`).
     pub disarmed: Vec<(PairId, Real)>,
+    /// The last values computed, with what they depend on (see [`Memo`]).
+    memo: Memo,
+}
+
+/// The values of the last [`EventFunctions::values`] call, with everything they depend on:
+/// the state, the candidates, the floors of the disarmed pairs and the closed points
+/// (their modes, slip margins and reference forces). The locator samples each step at
+/// both ends, and a step starts where the last one ended: its first sample is the last
+/// one's final sample, a constrained dynamics solve saved per step when nothing changed
+/// in between (an event, a new mode, a released margin, a new candidate all do).
+#[derive(Default)]
+struct Memo {
+    t: Real,
+    y: Vec<Real>,
+    candidates: Vec<PairId>,
+    disarmed: Vec<(PairId, Real)>,
+    closed: Vec<super::persistent::Closed>,
+    g: Vec<Real>,
+}
+
+impl Memo {
+    fn holds(&self, fns: &GapFunctions<'_>, t: Real, y: &[Real], m: usize) -> bool {
+        self.t == t
+            && self.g.len() == m
+            && self.y == y
+            && self.candidates == fns.candidates
+            && self.disarmed == fns.disarmed
+            && self.closed == fns.persistent.closed()
+    }
+
+    fn keep(&mut self, fns: &GapFunctions<'_>, t: Real, y: &[Real], g: &[Real]) {
+        self.t = t;
+        self.y.clear();
+        self.y.extend_from_slice(y);
+        self.candidates.clear();
+        self.candidates.extend_from_slice(&fns.candidates);
+        self.disarmed.clear();
+        self.disarmed.extend_from_slice(&fns.disarmed);
+        self.closed.clear();
+        self.closed.extend_from_slice(fns.persistent.closed());
+        self.g.clear();
+        self.g.extend_from_slice(g);
+    }
 }
 
 impl<'m> GapFunctions<'m> {
@@ -72,6 +115,7 @@ impl<'m> GapFunctions<'m> {
             scales,
             candidates: Vec::new(),
             disarmed: Vec::new(),
+            memo: Memo::default(),
         }
     }
 
@@ -156,10 +200,9 @@ impl GapFunctions<'_> {
     }
 }
 
-impl EventFunctions for GapFunctions<'_> {
-    type Error = Nested;
-
-    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
+impl GapFunctions<'_> {
+    /// [`EventFunctions::values`], computed.
+    fn values_here(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
         let model = self.model;
         let (n, nqu) = (model.nq(), model.nq() + model.nu());
         let (q, u) = (&y[..n], &y[n..nqu]);
@@ -195,6 +238,22 @@ impl EventFunctions for GapFunctions<'_> {
             };
             g[at + 3 + 3 * j] = self.persistent.painleve(i).min(self.scales.length);
         }
+        Ok(())
+    }
+}
+
+impl EventFunctions for GapFunctions<'_> {
+    type Error = Nested;
+
+    fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
+        if self.memo.holds(self, t, y, g.len()) {
+            g.copy_from_slice(&self.memo.g);
+            return Ok(());
+        }
+        self.values_here(t, y, g)?;
+        let mut memo = std::mem::take(&mut self.memo);
+        memo.keep(self, t, y, g);
+        self.memo = memo;
         Ok(())
     }
 

@@ -27,11 +27,13 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{AtTime, Scales, SimError};
 use crate::contact::{
-    ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent, contact_points, frame_at,
+    ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent, contact_points,
+    frame_at, relative_velocity,
 };
-use crate::dynamics::{coordinate_rates, solve_mass};
+use crate::dynamics::coordinate_rates;
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
+use crate::linalg::dot;
 use crate::math::{Pose, Real, Vec2};
 use crate::model::{Model, PairId};
 use crate::state::Data;
@@ -142,15 +144,16 @@ pub struct Persistent {
     /// The velocities `(v_n, v_t)` of each closed point at the four shifts of the
     /// differences.
     v_fd: Vec<[(Real, Real); 4]>,
-    /// One column of `M⁻¹ Jᵀ`.
+    /// One column of `Y`, or `Y λ` (nu).
     column: Vec<Real>,
     /// The velocity-product terms `c` (2k).
     c: DVector<Real>,
     /// `J` (2k × nu): rows n, t of each closed point.
     jac: DMatrix<Real>,
-    /// `M⁻¹ Jᵀ` (nu × 2k).
-    minv_jt: DMatrix<Real>,
-    /// `A = J M⁻¹ Jᵀ` (2k × 2k).
+    /// `Y = F⁻¹ Jᵀ` (nu × 2k) for the factor `M = F Fᵀ` of the mass matrix
+    /// ([`crate::dynamics::MassFactor::solve_factor_in_place`]).
+    y: DMatrix<Real>,
+    /// `A = J M⁻¹ Jᵀ = Yᵀ Y` (2k × 2k, symmetric).
     a: DMatrix<Real>,
     /// `b = J u̇_free + c` (2k).
     b: DVector<Real>,
@@ -180,7 +183,7 @@ impl Persistent {
             column: vec![0.0; nu],
             c: DVector::zeros(0),
             jac: DMatrix::zeros(0, nu),
-            minv_jt: DMatrix::zeros(nu, 0),
+            y: DMatrix::zeros(nu, 0),
             a: DMatrix::zeros(0, 0),
             b: DVector::zeros(0),
             lambda: DVector::zeros(0),
@@ -201,7 +204,7 @@ impl Persistent {
         self.closed = closed;
         self.mu = mu;
         self.jac = DMatrix::zeros(2 * k, nu);
-        self.minv_jt = DMatrix::zeros(nu, 2 * k);
+        self.y = DMatrix::zeros(nu, 2 * k);
         self.a = DMatrix::zeros(2 * k, 2 * k);
         self.b = DVector::zeros(2 * k);
         self.c = DVector::zeros(2 * k);
@@ -254,14 +257,13 @@ impl Persistent {
             update_velocities(model, &mut self.data_fd, u).map_err(|e| e.at(t))?;
             for i in 0..k {
                 let Closed { pair, local, .. } = self.closed[i];
-                let p = self
+                self.v_fd[i][shift] = self
                     .eval
-                    .point(model, &self.data_fd, pair, local, self.scales.length)?
+                    .velocities(model, &self.data_fd, pair, local, self.scales.length)?
                     .ok_or_else(|| SimError::Contact {
                         t,
                         message: format!("closed contact point of pair #{} lost", pair.index()),
                     })?;
-                self.v_fd[i][shift] = (p.v_n, p.v_t);
             }
         }
         let richardson = |d1: Real, d2: Real| (4.0 * d1 - d2) / 3.0;
@@ -309,15 +311,25 @@ impl Persistent {
             }
         }
         self.velocity_products(model, (t, q, u))?;
-        // M⁻¹ Jᵀ, column by column, with the factor of M; A = J M⁻¹ Jᵀ; b = J u̇_free + c.
+        // Y = F⁻¹ Jᵀ column by column, with the factor M = F Fᵀ; A = J M⁻¹ Jᵀ = Yᵀ Y, one
+        // triangle of dot products mirrored; b = J u̇_free + c.
         for col in 0..2 * k {
-            for (x, j) in self.column.iter_mut().zip(self.jac.row(col).iter()) {
+            let mut y = self.y.column_mut(col);
+            for (x, j) in y.iter_mut().zip(self.jac.row(col).iter()) {
                 *x = *j;
             }
-            solve_mass(data, &mut self.column).map_err(|e| e.at(t))?;
-            self.minv_jt.column_mut(col).copy_from_slice(&self.column);
+            (data.mass_factor)
+                .solve_factor_in_place(y.as_mut_slice())
+                .map_err(|e| e.at(t))?;
         }
-        self.a.gemm(1.0, &self.jac, &self.minv_jt, 0.0);
+        for i in 0..2 * k {
+            let yi = self.y.column(i);
+            for j in 0..=i {
+                let v = dot(yi.as_slice(), self.y.column(j).as_slice());
+                self.a[(i, j)] = v;
+                self.a[(j, i)] = v;
+            }
+        }
         self.b.copy_from(&self.c);
         self.b.gemv(1.0, &self.jac, &data.udot, 1.0);
         Ok(())
@@ -357,7 +369,15 @@ impl Persistent {
             },
         )?;
         self.lambda = sol.x;
-        data.udot.gemv(1.0, &self.minv_jt, &self.lambda, 1.0);
+        // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ).
+        let mut y_lambda = DVector::from_vec(std::mem::take(&mut self.column));
+        y_lambda.gemv(1.0, &self.y, &self.lambda, 0.0);
+        let solved = (data.mass_factor).solve_factor_transpose_in_place(y_lambda.as_mut_slice());
+        self.column = y_lambda.data.into();
+        solved.map_err(|e| e.at(t))?;
+        for (a, d) in data.udot.iter_mut().zip(&self.column) {
+            *a += d;
+        }
         Ok(())
     }
 
@@ -529,6 +549,29 @@ impl PointScratch {
         prediction: Real,
     ) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
         pair_points(model, data, pair, prediction, &mut self.manifold)
+    }
+
+    /// The velocities `(v_n, v_t)` of [`Self::point`] (the same numbers), without its
+    /// Jacobian rows.
+    pub fn velocities(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        pair: PairId,
+        local: Vec2,
+        prediction: Real,
+    ) -> Result<Option<(Real, Real)>, SimError> {
+        let t = data.time;
+        let candidates = self.candidates(model, data, pair, prediction)?;
+        let Some((c, _)) = candidates
+            .into_iter()
+            .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
+        else {
+            return Ok(None);
+        };
+        let v_r = relative_velocity(model, data, pair, &c).map_err(|e| e.at(t))?;
+        let n = -c.normal;
+        Ok(Some((v_r.dot(n), v_r.dot(crate::math::perp(n)))))
     }
 
     /// The point of `pair` nearest `local` (a point on `a` in its body's frame) at the state

@@ -189,3 +189,58 @@ fn the_dense_mass_matrix_has_no_entry_outside_the_pattern() {
     }
     assert!(sparse >= 10, "{sparse} models with a sparse factor");
 }
+
+#[test]
+fn the_half_solves_compose_to_the_solve_and_give_w_as_a_gram_matrix() {
+    // For M = F Fᵀ (F = Lᵀ of the tree factor, L of the dense one): F⁻ᵀ (F⁻¹ b) is the
+    // solve of M x = b, and with Y = F⁻¹ Jᵀ, Yᵀ Y = J M⁻¹ Jᵀ (what persistent contact
+    // builds its W from). Checked against nalgebra's dense Cholesky of M on random trees
+    // (both kinds of factor) and a 12-link chain (a full pattern, the dense factor).
+    let (mut sparse, mut dense_factors) = (0, 0);
+    for seed in 0..30 {
+        let model = if seed == 29 {
+            chain(12, 1.0, 0.5, 9.81)
+        } else {
+            random_tree(seed, TreeOptions::EVERYTHING, Pose::identity())
+        };
+        let mut rng = Rng::new(300 + seed);
+        let n = model.nu();
+        let mut data = Data::new(&model);
+        let (q, u) = (rng.vector(n, 2.0), rng.vector(n, 2.0));
+        forward_dynamics(&model, &mut data, 0.1, &q, &u).unwrap();
+        let chol = Cholesky::new(data.mass.to_dense()).unwrap();
+        // Three rows of a "Jacobian".
+        let j = DMatrix::from_fn(3, n, |_, _| rng.vector(1, 1.0)[0]);
+        let mut y = DMatrix::zeros(n, 3);
+        for c in 0..3 {
+            let mut col: Vec<Real> = j.row(c).iter().copied().collect();
+            data.mass_factor.solve_factor_in_place(&mut col).unwrap();
+            y.column_mut(c).copy_from_slice(&col);
+            data.mass_factor
+                .solve_factor_transpose_in_place(&mut col)
+                .unwrap();
+            let expected = chol.solve(&j.row(c).transpose());
+            let err = (DVector::from_vec(col) - &expected).amax();
+            assert!(
+                err < 1e-11 * (1.0 + expected.amax()),
+                "seed {seed}: {err:e}"
+            );
+        }
+        let w = y.transpose() * &y;
+        let expected = &j * chol.solve(&j.transpose());
+        let err = (&w - &expected).amax();
+        assert!(
+            err < 1e-11 * (1.0 + expected.amax()),
+            "seed {seed}: W {err:e}"
+        );
+        if data.mass_factor.tree_factor().is_some() {
+            sparse += 1;
+        } else {
+            dense_factors += 1;
+        }
+    }
+    assert!(
+        sparse >= 5 && dense_factors >= 1,
+        "{sparse} sparse, {dense_factors} dense"
+    );
+}
