@@ -38,8 +38,6 @@ pub struct MinNorm {
     beta_t: Vec<Real>,
     /// The solution in pivoted order.
     z: Vec<Real>,
-    /// The norms of the columns' remaining parts while `R` is made.
-    norms: Vec<(Real, Real)>,
 }
 
 /// One Householder reflection `H = I − β v vᵀ` with `H x = α e₀`, for the entries `x` of
@@ -128,48 +126,32 @@ impl MinNorm {
         self.c.extend(b.iter());
         self.perm.clear();
         self.perm.extend(0..n);
-        // The norms of the columns' remaining parts, downdated after each reflection
-        // (`(estimate, norm at its last computation)`, LAPACK's xLAQP2).
-        self.norms.clear();
-        for j in 0..n {
-            let col = &self.r.as_slice()[j * m..(j + 1) * m];
-            let norm = dot(col, col).sqrt();
-            self.norms.push((norm, norm));
-        }
-        let first = self.norms.iter().map(|v| v.0).fold(0.0, Real::max);
+        let first = (0..n)
+            .map(|j| {
+                let col = &self.r.as_slice()[j * m..(j + 1) * m];
+                dot(col, col).sqrt()
+            })
+            .fold(0.0, Real::max);
         let tol = m.max(n) as Real * Real::EPSILON * first;
         let mut rank = 0;
         for k in 0..m.min(n) {
-            // The column of largest remaining norm; the rank is decided on the computed
-            // norm, and if that is negligible, on every remaining column's computed norm
-            // (an estimate off by its downdating cannot end the factorization early).
-            let remaining = |r: &DMatrix<Real>, j: usize| {
-                let col = &r.as_slice()[j * m + k..(j + 1) * m];
-                dot(col, col).sqrt()
-            };
-            let mut best = (k..n).fold((k, -1.0), |best, j| {
-                if self.norms[j].0 > best.1 {
-                    (j, self.norms[j].0)
-                } else {
-                    best
+            // The column of largest remaining norm, recomputed: not downdated (LAPACK's
+            // xLAQP2), whose other choices among near ties of redundant contact points'
+            // columns sent the 32-link chain on the floor into a stall of modes at 4.92 s
+            // that the recomputed norms do not meet.
+            let mut best = (k, -1.0);
+            for j in k..n {
+                let col = &self.r.as_slice()[j * m + k..(j + 1) * m];
+                let s = dot(col, col);
+                if s > best.1 {
+                    best = (j, s);
                 }
-            });
-            if remaining(&self.r, best.0) <= tol {
-                best = (k, -1.0);
-                for j in k..n {
-                    let norm = remaining(&self.r, j);
-                    self.norms[j] = (norm, norm);
-                    if norm > best.1 {
-                        best = (j, norm);
-                    }
-                }
-                if best.1 <= tol {
-                    break;
-                }
+            }
+            if best.1.sqrt() <= tol {
+                break;
             }
             self.r.swap_columns(k, best.0);
             self.perm.swap(k, best.0);
-            self.norms.swap(k, best.0);
             let (alpha, v0, beta) =
                 householder(self.r.as_slice()[k * m + k..(k + 1) * m].iter().copied());
             // Apply H to the columns right of k and to c.
@@ -179,24 +161,6 @@ impl MinNorm {
             reflect_vector(&self.r, k, (v0, beta), &mut self.c);
             self.r[(k, k)] = alpha;
             rank = k + 1;
-            // Downdate the norms by the entries now in row k; recompute one whose estimate
-            // lost too many digits to cancellation.
-            for j in k + 1..n {
-                let (estimate, computed) = self.norms[j];
-                if estimate == 0.0 {
-                    continue;
-                }
-                let ratio = self.r[(k, j)].abs() / estimate;
-                let shrink = (1.0 - ratio * ratio).max(0.0);
-                let lost = shrink * (estimate / computed) * (estimate / computed);
-                self.norms[j] = if lost <= Real::EPSILON.sqrt() {
-                    let col = &self.r.as_slice()[j * m + k + 1..(j + 1) * m];
-                    let norm = dot(col, col).sqrt();
-                    (norm, norm)
-                } else {
-                    (estimate * shrink.sqrt(), computed)
-                };
-            }
         }
         let r = rank;
         self.z.clear();
