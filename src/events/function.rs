@@ -20,6 +20,14 @@ pub trait EventFunctions {
     /// Writes `gᵢ(t, y)`, `i = 0 … m−1`, into `g`.
     fn values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Self::Error>;
 
+    /// Writes `gᵢ(t, y)` at an interior sample of a step's regular sampling (not at its
+    /// ends, not in a root search): a function that the caller can show not to reach zero
+    /// anywhere in the step may get a positive stand-in instead of its value, since the
+    /// locator reads only the signs of such samples. The default computes every value.
+    fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Self::Error> {
+        self.values(t, y, g)
+    }
+
     /// Writes `ġᵢ(t, y)` into `g_dot` given `ẏ = dy` and returns `Ok(true)`, or returns
     /// `Ok(false)` if the rates are not available (the default).
     fn rates(

@@ -157,6 +157,16 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
             .map_err(|source| EventError::Function { t, source })
     }
 
+    /// `g(t)` into `scratch.g` at an interior sample of the step: stand-ins allowed (see
+    /// [`EventFunctions::interior_values`]).
+    fn interior_values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+        self.state_at(t);
+        self.counters.value_evals += 1;
+        self.funcs
+            .interior_values(t, &self.s.y, &mut self.s.g)
+            .map_err(|source| EventError::Function { t, source })
+    }
+
     /// The caller's `ġ(t)` into `scratch.gd`, if it has rates; `y` must hold the state
     /// at `t` ([`values`](Self::values) at the same `t` just before).
     pub(crate) fn caller_rates(&mut self, t: Real) -> Result<bool, EventError<G::Error>> {
@@ -373,8 +383,9 @@ impl EventLocator {
     }
 }
 
-/// Stage 1: `g` at the `k + 2` sample times, and `ġ` where it is needed (everywhere with
-/// the extremum search; else at the start, if an armed function is not positive there).
+/// Stage 1: `g` at the `k + 2` sample times (the interior ones through
+/// [`EventFunctions::interior_values`]), and `ġ` where it is needed (everywhere with the
+/// extremum search; else at the start, if an armed function is not positive there).
 fn sample<St: Stepper, G: EventFunctions>(
     sp: &mut Sampler<'_, St, G>,
     smp: &mut Samples,
@@ -391,7 +402,11 @@ fn sample<St: Stepper, G: EventFunctions>(
             t0 + (t1 - t0) * (j as Real / parts as Real)
         };
         smp.ts[j] = t;
-        sp.values(t)?;
+        if j == 0 || j == parts {
+            sp.values(t)?;
+        } else {
+            sp.interior_values(t)?;
+        }
         check_finite(&sp.s.g, armed, t)?;
         smp.gs[j * m..(j + 1) * m].copy_from_slice(&sp.s.g);
         let at_contact = j == 0 && sp.s.g.iter().zip(armed).any(|(g, &a)| a && *g <= 0.0);

@@ -61,6 +61,71 @@ pub struct GapFunctions<'m> {
     pub disarmed: Vec<(PairId, Real)>,
     /// The last values computed, with what they depend on (see [`Memo`]).
     memo: Memo,
+    /// The force functions that cannot reach zero in the current step (see
+    /// [`StandIns`]).
+    stand_ins: StandIns,
+}
+
+/// Stand-ins for the force functions of the closed points at the interior samples of a
+/// step, when none of them can reach zero in it.
+///
+/// Those functions (`λ_n`, the friction margin, the Painlevé coefficient) have no rate, and
+/// each sample of them costs the constrained dynamics (the forces of every closed point).
+/// The right-hand side computed them at every stage of the step (the integrator's own
+/// samples of it, [`Persistent::bounds`]), and the locator's first sample at the step's
+/// start. With `lo`, `hi` the least and largest of these values of a function, the
+/// function cannot reach zero in the step when [`stays_positive`]:
+///
+/// ```text
+/// lo > 4 (hi − lo)
+/// ```
+///
+/// The forces are part of the right-hand side (`u̇` holds `M⁻¹ Jᵀ λ`), so along an accepted
+/// step they vary as smoothly as the stages resolve: like a polynomial of the method's
+/// degree through the stage values. A polynomial of degree ≤ 5 through DOPRI5's nodes
+/// `0, 1/5, 3/10, 4/5, 8/9, 1` stays within `(Λ − 1)/2 · (hi − lo)` below `lo`, with `Λ`
+/// = 5.64 the Lebesgue constant of those nodes (largest at `t = 0.56 h`, in the wide gap
+/// between 3/10 and 4/5): above `lo − 2.32 (hi − lo) > 0.42 lo` under the rule (the test
+/// in this module). When every force function is so, the interior samples compute only the
+/// kinematic functions (the gaps, the slips) and write `lo` for the others: the locator
+/// reads only the signs of the samples of functions without rates. The exact evaluations
+/// (the step's end, root searches, the settling) check the bound, `g ≥ lo / 2`; if one
+/// fails, [`GapFunctions::stand_ins_failed`] tells the loop to locate again without
+/// stand-ins.
+/// Whether a function whose values at a step's start and stages lie in `[lo, hi]` stays
+/// positive over the step (see [`StandIns`]): `lo > 4 (hi − lo)`.
+fn stays_positive(lo: Real, hi: Real) -> bool {
+    lo > 0.0 && lo > 4.0 * (hi - lo)
+}
+
+/// What the stand-ins of the force functions did in a run (see [`StandIns`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StandInCounts {
+    /// Interior samples of the event location with closed points.
+    pub samples: u64,
+    /// Those that used the stand-ins (no constrained dynamics solved).
+    pub used: u64,
+    /// Steps located again because an exact value broke a stand-in's bound.
+    pub relocated: u64,
+}
+
+#[derive(Default)]
+struct StandIns {
+    /// `(lo, hi)` of each closed point's force functions over the step's stages.
+    stages: Vec<[(Real, Real); 3]>,
+    /// Decided for this step: `Some(true)` when every force function cannot reach zero.
+    decided: Option<bool>,
+    /// `lo` of each force function, with the start's value (NaN for a slip function).
+    lo: Vec<[Real; 3]>,
+    /// Whether an interior sample of this step used them.
+    used: bool,
+    /// Whether an exact value broke the bound after they were used.
+    failed: bool,
+    /// Never use them (the oracle of the tests: `Simulation::set_stand_ins(false)`).
+    off: bool,
+    /// Interior samples with closed points, those that used the stand-ins, and the steps
+    /// located again after one failed.
+    counts: StandInCounts,
 }
 
 /// The values of the last [`EventFunctions::values`] call, with everything they depend on:
@@ -116,7 +181,40 @@ impl<'m> GapFunctions<'m> {
             candidates: Vec::new(),
             disarmed: Vec::new(),
             memo: Memo::default(),
+            stand_ins: StandIns::default(),
         }
+    }
+
+    /// Starts the event location of a step whose right-hand sides gave the force
+    /// functions the bounds `stages` ([`Persistent::bounds`] of the ODE system, whose
+    /// closed points are these). Empty: no stand-ins.
+    pub fn begin_step(&mut self, stages: &[[(Real, Real); 3]]) {
+        let s = &mut self.stand_ins;
+        s.stages.clear();
+        s.stages.extend_from_slice(stages);
+        s.decided = None;
+        if s.failed {
+            s.counts.relocated += 1;
+        }
+        s.used = false;
+        s.failed = false;
+    }
+
+    /// Whether an exact evaluation in this step broke the bound of a stand-in used at an
+    /// interior sample: the step must be located again without them
+    /// (`begin_step(&[])`).
+    pub fn stand_ins_failed(&self) -> bool {
+        self.stand_ins.failed
+    }
+
+    /// Allows the stand-ins (the default) or forbids them.
+    pub fn set_stand_ins(&mut self, on: bool) {
+        self.stand_ins.off = !on;
+    }
+
+    /// What the stand-ins did so far.
+    pub fn stand_in_counts(&self) -> StandInCounts {
+        self.stand_ins.counts
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -201,6 +299,19 @@ impl GapFunctions<'_> {
 }
 
 impl GapFunctions<'_> {
+    /// Slot 0 of every candidate (the gaps), at the positions of `self.data`.
+    fn gap_slots(&mut self, t: Real, g: &mut [Real]) -> Result<(), Nested> {
+        for r in 0..self.candidates.len() {
+            let pair = self.candidates[r];
+            let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
+                Ok(k) => self.disarmed[k].1,
+                Err(_) => 0.0,
+            };
+            g[SLOTS * r] = self.open_gap_here(pair, t)? - floor;
+        }
+        Ok(())
+    }
+
     /// [`EventFunctions::values`], computed.
     fn values_here(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
         let model = self.model;
@@ -215,30 +326,128 @@ impl GapFunctions<'_> {
             self.persistent
                 .accelerate(model, &mut self.data, (t, q, u))?;
         }
-        for r in 0..self.candidates.len() {
-            let pair = self.candidates[r];
-            let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
-                Ok(k) => self.disarmed[k].1,
-                Err(_) => 0.0,
-            };
-            g[SLOTS * r] = self.open_gap_here(pair, t)? - floor;
-        }
+        self.gap_slots(t, g)?;
         for i in 0..self.persistent.closed().len() {
             let c = self.persistent.closed()[i];
             let j = rank(&self.persistent, i);
             let Some(at) = self.slot_of(c.pair, 0) else {
                 continue;
             };
-            let (lambda_n, lambda_t) = self.persistent.force(i);
-            let mu = self.persistent.mu(i);
-            g[at + 1 + 3 * j] = lambda_n;
+            let f = self.persistent.force_functions(i);
+            g[at + 1 + 3 * j] = f[0];
             g[at + 2 + 3 * j] = match c.hold {
-                Hold::Stick => mu * lambda_n - lambda_t.abs(),
+                Hold::Stick => f[1],
                 Hold::Slide(s) => s * self.persistent.points()[i].v_t + c.slip_margin,
             };
-            g[at + 3 + 3 * j] = self.persistent.painleve(i).min(self.scales.length);
+            g[at + 3 + 3 * j] = f[2];
         }
         Ok(())
+    }
+
+    /// Whether every force function of the closed points cannot reach zero in this step
+    /// (see [`StandIns`]); decided once per step, from the stages' bounds and the exact
+    /// values at the step's start (the last exact evaluation, `self.memo`).
+    fn stand_ins_allowed(&mut self) -> bool {
+        if let Some(allowed) = self.stand_ins.decided {
+            return allowed;
+        }
+        let closed = self.persistent.closed();
+        let s = &mut self.stand_ins;
+        let start_known = !self.memo.g.is_empty()
+            && self.memo.candidates == self.candidates
+            && self.memo.closed == closed;
+        let mut allowed =
+            !s.off && start_known && !closed.is_empty() && s.stages.len() == closed.len();
+        s.lo.clear();
+        for (i, (c, stages)) in closed.iter().zip(&s.stages).enumerate() {
+            if !allowed {
+                break;
+            }
+            let Some(at) = self.candidates.binary_search(&c.pair).ok() else {
+                allowed = false;
+                break;
+            };
+            let j = rank(&self.persistent, i);
+            let mut lo = [Real::NAN; 3];
+            for (f, (&(a, b), l)) in stages.iter().zip(&mut lo).enumerate() {
+                if f == 1 && matches!(c.hold, Hold::Slide(_)) {
+                    continue; // the slip velocity: computed at every sample
+                }
+                let start = self.memo.g[SLOTS * at + 1 + f + 3 * j];
+                *l = a.min(start);
+                if !(a <= b && stays_positive(*l, b.max(start))) {
+                    allowed = false;
+                }
+            }
+            s.lo.push(lo);
+        }
+        s.decided = Some(allowed);
+        allowed
+    }
+
+    /// The values at an interior sample with the force functions' stand-ins: the gaps
+    /// and the slip velocities computed, `lo` for the rest (see [`StandIns`]).
+    fn values_with_stand_ins(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
+        let model = self.model;
+        let (n, nqu) = (model.nq(), model.nq() + model.nu());
+        g.fill(self.scales.length);
+        update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
+        update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
+        self.gap_slots(t, g)?;
+        for i in 0..self.persistent.closed().len() {
+            let c = self.persistent.closed()[i];
+            let j = rank(&self.persistent, i);
+            let at = SLOTS * self.candidates.binary_search(&c.pair).unwrap_or(0);
+            let lo = self.stand_ins.lo[i];
+            g[at + 1 + 3 * j] = lo[0];
+            g[at + 2 + 3 * j] = match c.hold {
+                Hold::Stick => lo[1],
+                Hold::Slide(s) => {
+                    let v = self.scratch.velocities(
+                        model,
+                        &self.data,
+                        c.pair,
+                        c.local,
+                        self.scales.length,
+                    )?;
+                    let (_, v_t) = v.ok_or_else(|| {
+                        Nested::from(super::SimError::Contact {
+                            t,
+                            message: format!(
+                                "closed contact point of pair #{} lost",
+                                c.pair.index()
+                            ),
+                        })
+                    })?;
+                    s * v_t + c.slip_margin
+                }
+            };
+            g[at + 3 + 3 * j] = lo[2];
+        }
+        self.stand_ins.used = true;
+        self.stand_ins.counts.used += 1;
+        Ok(())
+    }
+
+    /// After an exact evaluation: whether a force function that had a stand-in in this
+    /// step broke its bound `g ≥ lo / 2` (see [`StandIns`]).
+    fn check_stand_ins(&mut self, g: &[Real]) {
+        let s = &mut self.stand_ins;
+        if !s.used || s.failed {
+            return;
+        }
+        let closed = self.persistent.closed();
+        for (i, lo) in s.lo.iter().enumerate() {
+            let Some(at) = self.candidates.binary_search(&closed[i].pair).ok() else {
+                continue;
+            };
+            let j = rank(&self.persistent, i);
+            for (f, l) in lo.iter().enumerate() {
+                if !(l.is_nan() || g[SLOTS * at + 1 + f + 3 * j] >= 0.5 * l) {
+                    s.failed = true;
+                }
+            }
+        }
     }
 }
 
@@ -251,10 +460,22 @@ impl EventFunctions for GapFunctions<'_> {
             return Ok(());
         }
         self.values_here(t, y, g)?;
+        self.check_stand_ins(g);
         let mut memo = std::mem::take(&mut self.memo);
         memo.keep(self, t, y, g);
         self.memo = memo;
         Ok(())
+    }
+
+    fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
+        if !self.persistent.closed().is_empty() {
+            self.stand_ins.counts.samples += 1;
+        }
+        if self.stand_ins_allowed() {
+            self.values_with_stand_ins(t, y, g)
+        } else {
+            self.values(t, y, g)
+        }
     }
 
     fn rates(
@@ -301,5 +522,81 @@ impl EventFunctions for GapFunctions<'_> {
             };
         }
         Ok(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stays_positive;
+
+    /// Random polynomials of degree ≤ 5 on a step `[0, 1]`, set by their values at
+    /// DOPRI5's nodes (the step's start and its stages): wherever [`stays_positive`]
+    /// passes them, their least value over the whole step (on a grid of 10⁴ points),
+    /// computed here by Lagrange interpolation, is above 0.42 `lo` — the bound of its
+    /// doc, from the nodes' Lebesgue constant 5.64 — and so never reaches zero. Values at
+    /// the nodes drawn both uniformly and at the ends of `[lo, hi]` (the worst case of the
+    /// bound is an alternation of the extremes).
+    #[test]
+    fn a_polynomial_through_the_stages_that_passes_stays_positive() {
+        let nodes = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0];
+        let lagrange = |values: &[f64; 6], t: f64| -> f64 {
+            let mut sum = 0.0;
+            for (j, (&xj, &vj)) in nodes.iter().zip(values).enumerate() {
+                let mut l = 1.0;
+                for (k, &xk) in nodes.iter().enumerate() {
+                    if k != j {
+                        l *= (t - xk) / (xj - xk);
+                    }
+                }
+                sum += vj * l;
+            }
+            sum
+        };
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut passed, mut worst) = (0, f64::INFINITY);
+        for case in 0..20_000 {
+            let lo = 1.0;
+            let spread = lo * 0.3 * uniform();
+            let mut values = [0.0; 6];
+            for v in &mut values {
+                *v = if case % 2 == 0 {
+                    lo + spread * uniform()
+                } else {
+                    lo + spread * (uniform() < 0.5) as u8 as f64
+                };
+            }
+            let l = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let h = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if !stays_positive(l, h) {
+                continue;
+            }
+            passed += 1;
+            let least = (0..=10_000)
+                .map(|k| lagrange(&values, k as f64 / 10_000.0))
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.min(least / l);
+            assert!(
+                least > 0.42 * l,
+                "values {values:?}: least {least} below 0.42 lo"
+            );
+        }
+        assert!(passed > 5_000, "only {passed} cases passed the rule");
+        assert!(worst < 0.9, "no case came near the bound (worst {worst})");
+    }
+
+    /// The rule refuses what is not positive and what varies too much.
+    #[test]
+    fn the_rule_refuses_nonpositive_and_varying_functions() {
+        assert!(!stays_positive(0.0, 0.0));
+        assert!(!stays_positive(-1.0, -0.5));
+        assert!(!stays_positive(1.0, 1.26));
+        assert!(stays_positive(1.0, 1.24));
+        assert!(!stays_positive(f64::NAN, 1.0));
     }
 }

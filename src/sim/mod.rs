@@ -201,6 +201,20 @@ impl<'m> Simulation<'m> {
         self.every_pair = (!on).then(|| self.model.pair_ids().collect());
     }
 
+    /// Allows (the default) or forbids the stand-ins of the force functions at the
+    /// interior samples of the event location (see `gaps::StandIns`). Forbidden, every
+    /// sample solves the constrained dynamics: the runs must be the same bit for bit (the
+    /// oracle of `tests/all/events.rs`).
+    pub fn set_stand_ins(&mut self, on: bool) {
+        self.gaps.set_stand_ins(on);
+    }
+
+    /// What the stand-ins of the force functions did in the event location: the interior
+    /// samples with closed points, those that used them, the steps located again.
+    pub fn stand_in_counts(&self) -> gaps::StandInCounts {
+        self.gaps.stand_in_counts()
+    }
+
     /// The scales used for tolerances (length, resting speed).
     pub fn scales(&self) -> Scales {
         self.scales
@@ -246,6 +260,7 @@ impl<'m> Simulation<'m> {
             }
             self.broad_before_step()?;
             self.cap_for_spin()?;
+            self.system.persistent.clear_bounds();
             self.stepper.step(&mut self.system, t_end)?;
             self.broad_after_step()?;
             let Some(found) = self.locate()? else {
@@ -558,10 +573,19 @@ impl<'m> Simulation<'m> {
     /// the modes again there.
     fn locate(&mut self) -> Result<Option<Option<Event>>, SimError> {
         loop {
-            match self
+            self.gaps.begin_step(self.system.persistent.bounds());
+            let mut located = self
                 .locator
-                .locate(&self.stepper, &mut self.gaps, &self.armed)
-            {
+                .locate(&self.stepper, &mut self.gaps, &self.armed);
+            if self.gaps.stand_ins_failed() {
+                // A force function left unsampled inside the step broke its bound: sample
+                // it (see `gaps::StandIns`).
+                self.gaps.begin_step(&[]);
+                located = self
+                    .locator
+                    .locate(&self.stepper, &mut self.gaps, &self.armed);
+            }
+            match located {
                 Ok(found) => return Ok(Some(found)),
                 Err(crate::events::EventError::Function { t: t_f, source }) => {
                     let (t0, t1) = (self.stepper.t_prev(), self.stepper.t());
@@ -570,6 +594,7 @@ impl<'m> Simulation<'m> {
                             crate::events::EventError::Function { t: t_f, source };
                         return Err(e.into());
                     }
+                    self.system.persistent.clear_bounds();
                     if t_f - t0 <= 1e-12 * (1.0 + t0.abs()) {
                         self.stepper.restep_to(&mut self.system, t0)?;
                         return Ok(None);

@@ -165,6 +165,11 @@ pub struct Persistent {
     complete: bool,
     /// The complementarity solver of the mode selection.
     lcp: lcp::Solver,
+    /// The least and largest values of each closed point's force functions over the
+    /// evaluations since the last [`Self::clear_bounds`] (see [`Self::force_functions`]):
+    /// over the stages of a step, what the event location needs to know that a function
+    /// cannot reach zero in it.
+    bounds: Vec<[(Real, Real); 3]>,
 }
 
 impl Persistent {
@@ -190,6 +195,7 @@ impl Persistent {
             points: Vec::new(),
             complete: true,
             lcp: lcp::Solver::new(),
+            bounds: Vec::new(),
         }
     }
 
@@ -210,6 +216,34 @@ impl Persistent {
         self.c = DVector::zeros(2 * k);
         self.lambda = DVector::zeros(2 * k);
         self.points.clear();
+        self.clear_bounds();
+    }
+
+    /// Forgets the bounds of the force functions (before a step).
+    pub fn clear_bounds(&mut self) {
+        self.bounds.clear();
+        (self.bounds).resize(self.closed.len(), [(Real::INFINITY, Real::NEG_INFINITY); 3]);
+    }
+
+    /// The least and largest values `(lo, hi)` of each closed point's
+    /// [`Self::force_functions`] over the evaluations since the last
+    /// [`Self::clear_bounds`] (`lo > hi` where there was none).
+    pub fn bounds(&self) -> &[[(Real, Real); 3]] {
+        &self.bounds
+    }
+
+    /// The event functions of closed point `i` that its forces give, at the last
+    /// evaluation ([`crate::sim::gaps::slot`] `1 + 3j`, `2 + 3j`, `3 + 3j`): `λ_n` (N), the
+    /// friction margin `μ λ_n − |λ_t|` of a sticking point (N; NaN for a sliding one, whose
+    /// function there is its slip velocity), and the Painlevé coefficient capped at the
+    /// scene's length (1/kg).
+    pub fn force_functions(&self, i: usize) -> [Real; 3] {
+        let (lambda_n, lambda_t) = self.force(i);
+        let margin = match self.closed[i].hold {
+            Hold::Stick => self.mu[i] * lambda_n - lambda_t.abs(),
+            Hold::Slide(_) => Real::NAN,
+        };
+        [lambda_n, margin, self.painleve(i).min(self.scales.length)]
     }
 
     /// The velocity-product parts `c = (c_n, c_t)` of the accelerations of every closed
@@ -377,6 +411,12 @@ impl Persistent {
         solved.map_err(|e| e.at(t))?;
         for (a, d) in data.udot.iter_mut().zip(&self.column) {
             *a += d;
+        }
+        for i in 0..self.closed.len() {
+            let f = self.force_functions(i);
+            for (b, v) in self.bounds[i].iter_mut().zip(f) {
+                *b = (b.0.min(v), b.1.max(v));
+            }
         }
         Ok(())
     }

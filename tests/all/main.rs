@@ -21,6 +21,7 @@ mod cli_run;
 mod contact_gap;
 mod contact_points;
 mod dynamics;
+mod event_stand_ins;
 mod events;
 mod fuzz_scenes;
 mod golden_scenes;
