@@ -57,6 +57,23 @@ fn householder(x: impl Iterator<Item = Real> + Clone) -> (Real, Real, Real) {
     (alpha, v0, beta)
 }
 
+/// Gives `m` the shape `rows × cols`, keeping its buffer when the shape is already right
+/// (nalgebra's `resize_mut` copies into a new buffer every time); the entries are left as
+/// they are when it is, and zero otherwise.
+pub(crate) fn fit_matrix(m: &mut DMatrix<Real>, rows: usize, cols: usize) {
+    if m.shape() != (rows, cols) {
+        m.resize_mut(rows, cols, 0.0);
+    }
+}
+
+/// Gives `v` the length `len`, keeping its buffer when it is already right (see
+/// [`fit_matrix`]).
+pub(crate) fn fit_vector(v: &mut DVector<Real>, len: usize) {
+    if v.len() != len {
+        v.resize_vertically_mut(len, 0.0);
+    }
+}
+
 /// `Σ aᵢ bᵢ` over the shorter of `a` and `b`, in four lanes (which the compiler
 /// vectorizes; a plain `zip().sum()` is one serial chain of additions).
 pub(crate) fn dot(a: &[Real], b: &[Real]) -> Real {
@@ -120,7 +137,7 @@ impl MinNorm {
     pub fn solve(&mut self, a: &DMatrix<Real>, b: &DVector<Real>, x: &mut DVector<Real>) -> usize {
         let (m, n) = a.shape();
         debug_assert_eq!(b.len(), m);
-        self.r.resize_mut(m, n, 0.0);
+        fit_matrix(&mut self.r, m, n);
         self.r.copy_from(a);
         self.c.clear();
         self.c.extend(b.iter());
@@ -173,7 +190,7 @@ impl MinNorm {
             }
         } else if r > 0 {
             // R₁ᵀ = Q₂ [T; 0]: Householder QR of the n × r transpose of the first r rows.
-            self.t.resize_mut(n, r, 0.0);
+            fit_matrix(&mut self.t, n, r);
             for i in 0..n {
                 for j in 0..r {
                     self.t[(i, j)] = if i >= j { self.r[(j, i)] } else { 0.0 };

@@ -8,7 +8,7 @@
 //! candidates.
 
 use parry2d_f64::bounding_volume::{Aabb, BoundingVolume};
-use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 
 use crate::kinematics::{KinematicsError, collider_pose};
 use crate::math::Real;
@@ -35,19 +35,64 @@ pub fn collider_boxes(
 /// The pairs of `model` whose boxes `boxes` (one per collider, [`collider_boxes`])
 /// overlap, in pair order.
 pub fn overlapping_pairs(model: &Model, boxes: &[Aabb]) -> Vec<PairId> {
-    let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, boxes);
     let mut out = Vec::new();
-    for (i, aabb) in boxes.iter().enumerate() {
-        for j in bvh.intersect_aabb(aabb) {
-            let j = j as usize;
-            if j > i
-                && let Some(p) = model.pair_between(ColliderId(i), ColliderId(j))
-            {
-                out.push(p);
+    PairFinder::default().overlapping_pairs(model, boxes, &mut out);
+    out
+}
+
+/// [`overlapping_pairs`] with its hierarchy kept between calls: the simulation loop asks
+/// for the overlapping pairs several times a step, and after the first call of a size
+/// this allocates nothing. The leaves' boxes are updated in place and the tree refitted
+/// (parry's `insert_or_update_partially`, `refit`), and rebuilt every [`Self::REBUILD`]
+/// calls so that its quality does not decay as the bodies move. The pairs found do not
+/// depend on the tree's shape: the same as a fresh tree's, in pair order.
+#[derive(Clone, Default)]
+pub struct PairFinder {
+    bvh: Bvh,
+    workspace: BvhWorkspace,
+    /// Calls since the tree was last built.
+    calls: usize,
+}
+
+impl PairFinder {
+    /// Calls between two rebuilds of the tree.
+    pub const REBUILD: usize = 64;
+
+    /// The pairs whose boxes overlap into `out` (cleared first), in pair order.
+    pub fn overlapping_pairs(&mut self, model: &Model, boxes: &[Aabb], out: &mut Vec<PairId>) {
+        let n = boxes.len();
+        if self.bvh.leaf_count() as usize != n || self.calls >= Self::REBUILD {
+            if self.bvh.leaf_count() as usize == n {
+                // Same leaves: rebuild in place, in the kept buffers.
+                for (i, aabb) in boxes.iter().enumerate() {
+                    self.bvh.insert_or_update_partially(*aabb, i as u32, 0.0);
+                }
+                self.bvh.refit(&mut self.workspace);
+                self.bvh
+                    .rebuild(&mut self.workspace, BvhBuildStrategy::Binned);
+            } else {
+                self.bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, boxes);
+            }
+            self.calls = 0;
+        } else {
+            for (i, aabb) in boxes.iter().enumerate() {
+                self.bvh.insert_or_update_partially(*aabb, i as u32, 0.0);
+            }
+            self.bvh.refit(&mut self.workspace);
+        }
+        self.calls += 1;
+        out.clear();
+        for (i, aabb) in boxes.iter().enumerate() {
+            for j in self.bvh.intersect_aabb(aabb) {
+                let j = j as usize;
+                if j > i
+                    && let Some(p) = model.pair_between(ColliderId(i), ColliderId(j))
+                {
+                    out.push(p);
+                }
             }
         }
+        out.sort_unstable();
+        out.dedup();
     }
-    out.sort_unstable();
-    out.dedup();
-    out
 }

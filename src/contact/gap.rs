@@ -1,6 +1,8 @@
 //! The signed gap of a contact pair.
 
 use parry2d_f64::query;
+
+use super::query as kept;
 use parry2d_f64::shape::{Shape, SupportMap};
 
 use crate::kinematics::{KinematicsError, collider_pose};
@@ -96,8 +98,8 @@ pub fn pair_contact(
     // so the distance is wrong; `query::contact(half-space, shape)` is right. Query with
     // the half-space first and swap the result back.
     let halfspace_b = cb.shape.as_halfspace().is_some();
-    let query_ab = || query::contact(&pose_a, &*ca.shape.0, &pose_b, &*cb.shape.0, prediction);
-    let query_ba = || query::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction);
+    let query_ab = || kept::contact(&pose_a, &*ca.shape.0, &pose_b, &*cb.shape.0, prediction);
+    let query_ba = || kept::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction);
     let (mut result, mut swapped) = if halfspace_b {
         (query_ba(), true)
     } else {

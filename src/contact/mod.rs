@@ -13,6 +13,7 @@ mod frame;
 mod gap;
 mod manifold;
 mod penetration;
+pub mod query;
 
 pub use frame::{
     ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at, relative_velocity,

@@ -275,6 +275,26 @@ impl EventLocator {
         self.done.resize(m, false);
     }
 
+    /// Reserves room for `m` event functions, so that [`Self::set_len`] up to `m` does not
+    /// allocate.
+    pub fn reserve(&mut self, m: usize) {
+        let k2 = self.settings.samples + 2;
+        let more = |len: usize, want: usize| want.saturating_sub(len);
+        self.samples.gs.reserve(more(self.samples.gs.len(), k2 * m));
+        self.samples
+            .gds
+            .reserve(more(self.samples.gds.len(), k2 * m));
+        for v in [
+            &mut self.scratch.g,
+            &mut self.scratch.gd,
+            &mut self.scratch.g2,
+        ] {
+            v.reserve(more(v.len(), m));
+        }
+        self.done.reserve(more(self.done.len(), m));
+        self.found.reserve(more(self.found.len(), m));
+    }
+
     /// The settings.
     pub fn settings(&self) -> &LocatorSettings {
         &self.settings

@@ -6,7 +6,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{Allowed, Mode, Solution, Solutions, TOL};
-use crate::linalg::MinNorm;
+use crate::linalg::{MinNorm, fit_matrix, fit_vector};
 use crate::math::Real;
 
 /// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
@@ -168,93 +168,181 @@ fn solve_modes(
 
 /// The forces and `w` of the linear system of one combination of modes, if its equations
 /// can hold; of several solutions, the nearest `reference` if one is given, else the
-/// proportional split below.
+/// proportional split below. (A fresh workspace: the enumeration and the mode
+/// selections; the right-hand side keeps a [`ModeSystem`].)
 fn linear(
     a: &DMatrix<Real>,
     b: &DVector<Real>,
     allowed: &[Allowed],
     modes: &[Mode],
-    (scale_a, scale_b): (Real, Real),
+    scales: (Real, Real),
     reference: Option<&DVector<Real>>,
 ) -> Option<(DVector<Real>, DVector<Real>)> {
-    let m = 2 * modes.len();
-    // One linear equation per unknown: rows of A (w = 0) or of the identity (x fixed).
-    let mut lhs = DMatrix::zeros(m, m);
-    let mut rhs = DVector::zeros(m);
-    for (i, mode) in modes.iter().enumerate() {
-        let (rn, rt) = (2 * i, 2 * i + 1);
-        match *mode {
-            Mode::Open => {
-                lhs[(rn, rn)] = 1.0;
-                lhs[(rt, rt)] = 1.0;
-            }
-            Mode::Stick => {
-                lhs.row_mut(rn).copy_from(&a.row(rn));
-                lhs.row_mut(rt).copy_from(&a.row(rt));
-                rhs[rn] = -b[rn];
-                rhs[rt] = -b[rt];
-            }
-            Mode::Slide(s) => {
-                lhs.row_mut(rn).copy_from(&a.row(rn));
-                rhs[rn] = -b[rn];
-                lhs[(rt, rt)] = 1.0;
-                lhs[(rt, rn)] = allowed[i].mu * s;
-            }
-        }
+    let mut ws = ModeSystem::default();
+    let mu = |i: usize| allowed[i].mu;
+    ws.solve(a, b, mu, modes, scales, reference.map(|r| r.as_slice()))?;
+    Some((ws.x, ws.w))
+}
+
+/// The linear system of one combination of modes and its solve, with every vector and
+/// matrix kept between calls: after the first call of a size, [`ModeSystem::forces_near`]
+/// allocates nothing (the right-hand side of the persistent contact calls it at every
+/// evaluation).
+///
+/// One linear equation per unknown: the rows of `A` for the closed directions (`w = 0`),
+/// and rows of the identity for the fixed forces (an open point's `x = 0`) or of the
+/// friction law (a sliding point's `x_t + μ s x_n = 0`):
+///
+/// ```text
+/// open:       x_n = 0,  x_t = 0
+/// stick:      (A x + b)_n = 0,  (A x + b)_t = 0
+/// slide (s):  (A x + b)_n = 0,  x_t + μ s x_n = 0
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct ModeSystem {
+    lhs: DMatrix<Real>,
+    rhs: DVector<Real>,
+    /// The solution `x`, and `w = A x + b`.
+    x: DVector<Real>,
+    w: DVector<Real>,
+    /// Scratch: residuals, the right-hand side about the reference.
+    tmp: DVector<Real>,
+    /// The split's scaled system, its scales and solution.
+    scaled: DMatrix<Real>,
+    scale: DVector<Real>,
+    y: DVector<Real>,
+    ls: MinNorm,
+}
+
+impl ModeSystem {
+    /// A workspace.
+    pub fn new() -> Self {
+        Self::default()
     }
-    // The equations must hold (a rank-deficient system may have no solution).
-    let holds = |x: &DVector<Real>| {
-        let res = &lhs * x - &rhs;
-        res.amax() <= TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE)
-    };
-    // The minimum-norm least-squares solution (a rank-deficient system: redundant contact
-    // points, e.g. both ends of a link lying flat, or two capsule ends at one hinge). Not
-    // nalgebra's SVD: it left a residual of 2.9e-6 on a well-conditioned system of rank 5
-    // of three sliding points of the 8-link chain (and 9e-4 on a regular one of the 16-link
-    // chain), so that consistent systems were taken for inconsistent ones (src/linalg.rs).
-    let mut ls = MinNorm::new();
-    let mut x = DVector::zeros(m);
-    // With a reference: x = x_ref + δ, δ the least change that meets the equations (the
-    // split is then the reference's, not the proportional one below).
-    let rank = match reference {
-        Some(x_ref) => {
-            ls.solve(&lhs, &(&rhs - &lhs * x_ref), &mut x);
-            x += x_ref;
-            None
-        }
-        None => Some(ls.solve(&lhs, &rhs, &mut x)),
-    };
-    if !(x.iter().all(|v| v.is_finite()) && holds(&x)) {
-        return None;
+
+    /// [`forces_near`] without allocating: the forces `x` of the modes nearest
+    /// `reference` and `w = A x + b`, if the modes' equations can hold. `mu` has one entry
+    /// per contact.
+    pub fn forces_near(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        mu: &[Real],
+        modes: &[Mode],
+        reference: &[Real],
+    ) -> Option<(&DVector<Real>, &DVector<Real>)> {
+        let scales = (a.amax().max(Real::MIN_POSITIVE), b.amax());
+        self.solve(a, b, |i| mu[i], modes, scales, Some(reference))?;
+        Some((&self.x, &self.w))
     }
-    // Redundant sticking points (a block on two corners, a rod lying flat): the split of
-    // their forces is statically indeterminate, and the minimum-norm one shares the
-    // friction equally, which leaves the cone of the less loaded point (a block on a 30°
-    // slope needed μ ≥ 0.812, what an equal split needs, instead of tan 30° = 0.577). The
-    // split of least Σ x_t,k² / (μ_k x_n,k) is taken instead — each point's friction in
-    // proportion to what its cone allows, within every cone whenever the total fits:
-    // the minimum-norm solution in y_t,k = x_t,k / √(μ_k x_n,k), with the normal forces of
-    // the first solution. Regular systems are left as they were.
-    if rank.is_some_and(|rank| rank < m) && modes.contains(&Mode::Stick) {
-        let mut scale = DVector::from_element(m, 1.0);
+
+    /// Whether `x` meets the equations, to `TOL` of the scales.
+    fn holds(&mut self, x: &DVector<Real>, (scale_a, scale_b): (Real, Real)) -> bool {
+        fit_vector(&mut self.tmp, x.len());
+        self.lhs.mul_to(x, &mut self.tmp);
+        self.tmp -= &self.rhs;
+        self.tmp.amax() <= TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE)
+    }
+
+    /// Solves the modes' system into `self.x`, `self.w`; `None` if it cannot hold.
+    fn solve(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        mu: impl Fn(usize) -> Real,
+        modes: &[Mode],
+        scales: (Real, Real),
+        reference: Option<&[Real]>,
+    ) -> Option<()> {
+        let m = 2 * modes.len();
+        fit_matrix(&mut self.lhs, m, m);
+        self.lhs.fill(0.0);
+        fit_vector(&mut self.rhs, m);
+        self.rhs.fill(0.0);
         for (i, mode) in modes.iter().enumerate() {
-            if *mode == Mode::Stick {
-                scale[2 * i + 1] = (allowed[i].mu * x[2 * i]).max(0.0).sqrt();
+            let (rn, rt) = (2 * i, 2 * i + 1);
+            match *mode {
+                Mode::Open => {
+                    self.lhs[(rn, rn)] = 1.0;
+                    self.lhs[(rt, rt)] = 1.0;
+                }
+                Mode::Stick => {
+                    self.lhs.row_mut(rn).copy_from(&a.row(rn));
+                    self.lhs.row_mut(rt).copy_from(&a.row(rt));
+                    self.rhs[rn] = -b[rn];
+                    self.rhs[rt] = -b[rt];
+                }
+                Mode::Slide(s) => {
+                    self.lhs.row_mut(rn).copy_from(&a.row(rn));
+                    self.rhs[rn] = -b[rn];
+                    self.lhs[(rt, rt)] = 1.0;
+                    self.lhs[(rt, rn)] = mu(i) * s;
+                }
             }
         }
-        let mut scaled = lhs.clone();
-        for (j, s) in scale.iter().enumerate() {
-            scaled.column_mut(j).scale_mut(*s);
+        // The minimum-norm least-squares solution (a rank-deficient system: redundant
+        // contact points, e.g. both ends of a link lying flat, or two capsule ends at one
+        // hinge). Not nalgebra's SVD: it left a residual of 2.9e-6 on a well-conditioned
+        // system of rank 5 of three sliding points of the 8-link chain (and 9e-4 on a
+        // regular one of the 16-link chain), so that consistent systems were taken for
+        // inconsistent ones (src/linalg.rs).
+        let mut x = std::mem::take(&mut self.x);
+        fit_vector(&mut x, m);
+        // With a reference: x = x_ref + δ, δ the least change that meets the equations
+        // (the split is then the reference's, not the proportional one below).
+        let rank = match reference {
+            Some(x_ref) => {
+                let x_ref = nalgebra::DVectorView::from_slice(x_ref, m);
+                fit_vector(&mut self.tmp, m);
+                self.lhs.mul_to(&x_ref, &mut self.tmp);
+                for (t, r) in self.tmp.iter_mut().zip(self.rhs.iter()) {
+                    *t = r - *t;
+                }
+                self.ls.solve(&self.lhs, &self.tmp, &mut x);
+                x += x_ref;
+                None
+            }
+            None => Some(self.ls.solve(&self.lhs, &self.rhs, &mut x)),
+        };
+        let ok = x.iter().all(|v| v.is_finite()) && self.holds(&x, scales);
+        self.x = x;
+        if !ok {
+            return None;
         }
-        let mut y = DVector::zeros(m);
-        ls.solve(&scaled, &rhs, &mut y);
-        let split = y.component_mul(&scale);
-        if split.iter().all(|v| v.is_finite()) && holds(&split) {
-            x = split;
+        // Redundant sticking points (a block on two corners, a rod lying flat): the split of
+        // their forces is statically indeterminate, and the minimum-norm one shares the
+        // friction equally, which leaves the cone of the less loaded point (a block on a 30°
+        // slope needed μ ≥ 0.812, what an equal split needs, instead of tan 30° = 0.577).
+        // The split of least Σ x_t,k² / (μ_k x_n,k) is taken instead — each point's
+        // friction in proportion to what its cone allows, within every cone whenever the
+        // total fits: the minimum-norm solution in y_t,k = x_t,k / √(μ_k x_n,k), with the
+        // normal forces of the first solution. Regular systems are left as they were.
+        if rank.is_some_and(|rank| rank < m) && modes.contains(&Mode::Stick) {
+            fit_vector(&mut self.scale, m);
+            self.scale.fill(1.0);
+            for (i, mode) in modes.iter().enumerate() {
+                if *mode == Mode::Stick {
+                    self.scale[2 * i + 1] = (mu(i) * self.x[2 * i]).max(0.0).sqrt();
+                }
+            }
+            fit_matrix(&mut self.scaled, m, m);
+            self.scaled.copy_from(&self.lhs);
+            for (j, s) in self.scale.iter().enumerate() {
+                self.scaled.column_mut(j).scale_mut(*s);
+            }
+            let mut y = std::mem::take(&mut self.y);
+            self.ls.solve(&self.scaled, &self.rhs, &mut y);
+            y.component_mul_assign(&self.scale);
+            if y.iter().all(|v| v.is_finite()) && self.holds(&y, scales) {
+                std::mem::swap(&mut self.x, &mut y);
+            }
+            self.y = y;
         }
+        fit_vector(&mut self.w, m);
+        a.mul_to(&self.x, &mut self.w);
+        self.w += b;
+        Some(())
     }
-    let w = a * &x + b;
-    Some((x, w))
 }
 
 #[cfg(test)]

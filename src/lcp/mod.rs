@@ -32,7 +32,7 @@ mod friction;
 pub mod lemke;
 mod repair;
 
-pub use enumerate::{forces, forces_near, solve};
+pub use enumerate::{ModeSystem, forces, forces_near, solve};
 pub use friction::{CHECK_TOL, LcpError, Solver, conditions_violation};
 
 use nalgebra::DVector;

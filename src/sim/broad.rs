@@ -41,7 +41,7 @@
 
 use parry2d_f64::bounding_volume::{Aabb, BoundingVolume};
 
-use crate::contact::broad::overlapping_pairs;
+use crate::contact::broad::PairFinder;
 use crate::kinematics::{KinematicsError, collider_pose};
 use crate::math::{Real, Vec2, perp};
 use crate::model::{ColliderId, Model, PairId};
@@ -135,7 +135,7 @@ pub(super) fn listed_pairs(
     data: &Data,
     all: Option<&[PairId]>,
     in_contact: impl Iterator<Item = PairId>,
-    boxes: &mut Vec<Aabb>,
+    (boxes, finder): (&mut Vec<Aabb>, &mut PairFinder),
     out: &mut Vec<PairId>,
 ) -> Result<(), KinematicsError> {
     out.clear();
@@ -144,7 +144,7 @@ pub(super) fn listed_pairs(
         return Ok(());
     }
     grown_boxes(model, data, boxes, |_| 0.0)?;
-    out.extend(overlapping_pairs(model, boxes));
+    finder.overlapping_pairs(model, boxes, out);
     out.extend(in_contact);
     out.sort_unstable();
     out.dedup();

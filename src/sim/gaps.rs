@@ -217,6 +217,17 @@ impl<'m> GapFunctions<'m> {
         self.stand_ins.counts
     }
 
+    /// Reserves room for `pairs` candidate pairs, so that the event location does not
+    /// allocate as the candidates grow up to that many.
+    pub fn reserve(&mut self, pairs: usize) {
+        self.candidates
+            .reserve(pairs.saturating_sub(self.candidates.len()));
+        let memo = &mut self.memo;
+        memo.candidates
+            .reserve(pairs.saturating_sub(memo.candidates.len()));
+        memo.g.reserve((SLOTS * pairs).saturating_sub(memo.g.len()));
+    }
+
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
     pub fn slot_of(&self, pair: PairId, s: usize) -> Option<usize> {
         let r = self.candidates.binary_search(&pair).ok()?;

@@ -106,6 +106,10 @@ pub struct Simulation<'m> {
     accumulating: PairMap<Option<contacts::Accumulation>>,
     /// The bounding boxes of the colliders for the broad phase (see [`broad`]).
     boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
+    /// Their hierarchy, kept between steps.
+    finder: crate::contact::broad::PairFinder,
+    /// Scratch pairs (see `rearm`).
+    pair_scratch: Vec<PairId>,
     /// Every pair, when the model has at most [`LISTED_PAIRS`] (the samples list them all).
     all_pairs: Option<Vec<PairId>>,
     /// Without the broad phase, every pair of the model: each step samples them all (the
@@ -156,25 +160,35 @@ impl<'m> Simulation<'m> {
         // rounding of any time near t_end. (The floor 10 ε |t| alone is 0 at t = 0, where a
         // run whose steps kept shrinking never failed.)
         stepper.set_h_min(10.0 * Real::EPSILON * settings.t_end.abs());
+        // Room for the event functions of every pair of a model with at most LISTED_PAIRS
+        // of them: the candidate pairs grow and shrink with the motion, and the loop then
+        // allocates nothing (beyond, the buffers grow to the largest candidate set).
+        let pairs = all_pairs.as_ref().map_or(0, Vec::len);
+        let mut gaps = GapFunctions::new(model, scales);
+        gaps.reserve(pairs);
+        let mut locator = EventLocator::new(n, 0, LocatorSettings::default());
+        locator.reserve(gaps::SLOTS * pairs);
         Ok(Self {
             model,
             settings: settings.clone(),
             overrides,
             scales,
             stepper,
-            locator: EventLocator::new(n, 0, LocatorSettings::default()),
+            locator,
             system,
-            gaps: GapFunctions::new(model, scales),
+            gaps,
             map: ImpactMap::new(model).with_still(scales.v_drift),
             coupling: coupling::Coupling::new(model),
             sampler: Data::new(model),
-            armed: Vec::new(),
+            armed: Vec::with_capacity(gaps::SLOTS * pairs),
             disarmed: PairMap::new(None),
             modes: PairMap::new(PairMode::Free),
             slips: PairMap::new(0),
             last_separation: PairMap::new(None),
             accumulating: PairMap::new(None),
             boxes: Vec::new(),
+            finder: Default::default(),
+            pair_scratch: Vec::new(),
             all_pairs,
             every_pair: None,
             listed: Vec::new(),
@@ -347,18 +361,27 @@ impl<'m> Simulation<'m> {
     /// is armed again once that gap exceeds the closed-contact tolerance; then the step cap
     /// is lifted.
     fn rearm(&mut self, t: Real) -> Result<(), SimError> {
-        let disarmed: Vec<PairId> = self.disarmed.changed().collect();
-        if disarmed.is_empty() {
-            return Ok(());
-        }
-        for pair in disarmed {
-            let gap = self.gaps.open_gap(pair, t, self.stepper.y())?;
-            if gap > self.scales.gap_tol {
-                self.disarmed[pair.index()] = None;
+        let mut disarmed = std::mem::take(&mut self.pair_scratch);
+        disarmed.clear();
+        disarmed.extend(self.disarmed.changed());
+        let mut result: Result<(), SimError> = Ok(());
+        for &pair in &disarmed {
+            match self.gaps.open_gap(pair, t, self.stepper.y()) {
+                Ok(gap) if gap > self.scales.gap_tol => self.disarmed[pair.index()] = None,
+                Ok(_) => {}
+                Err(e) => {
+                    result = Err(e.into());
+                    break;
+                }
             }
         }
-        self.disarmed.prune();
-        self.arm();
+        let any = !disarmed.is_empty();
+        self.pair_scratch = disarmed;
+        result?;
+        if any {
+            self.disarmed.prune();
+            self.arm();
+        }
         Ok(())
     }
 
@@ -417,10 +440,7 @@ impl<'m> Simulation<'m> {
             v * h + 0.5 * g * h * h + slack
         })
         .map_err(|e| e.at(t))?;
-        self.gaps.candidates = match &self.every_pair {
-            Some(all) => all.clone(),
-            None => crate::contact::broad::overlapping_pairs(self.model, &self.boxes),
-        };
+        self.find_candidates();
         self.arm();
         Ok(())
     }
@@ -461,12 +481,23 @@ impl<'m> Simulation<'m> {
         }
         self.y = y;
         result?;
-        self.gaps.candidates = match &self.every_pair {
-            Some(all) => all.clone(),
-            None => crate::contact::broad::overlapping_pairs(self.model, &self.boxes),
-        };
+        self.find_candidates();
         self.arm();
         Ok(())
+    }
+
+    /// The candidates of the event location: the pairs whose boxes `self.boxes` overlap,
+    /// or every pair without the broad phase.
+    fn find_candidates(&mut self) {
+        match &self.every_pair {
+            Some(all) => {
+                self.gaps.candidates.clear();
+                self.gaps.candidates.extend_from_slice(all);
+            }
+            None => {
+                (self.finder).overlapping_pairs(self.model, &self.boxes, &mut self.gaps.candidates)
+            }
+        }
     }
 
     /// The pairs whose boxes, grown by `margin` (m), overlap at the positions of
@@ -478,10 +509,9 @@ impl<'m> Simulation<'m> {
         }
         broad::grown_boxes(self.model, &self.sampler, &mut self.boxes, |_| margin)
             .map_err(|e| e.at(t))?;
-        Ok(crate::contact::broad::overlapping_pairs(
-            self.model,
-            &self.boxes,
-        ))
+        let mut near = Vec::new();
+        (self.finder).overlapping_pairs(self.model, &self.boxes, &mut near);
+        Ok(near)
     }
 
     /// The step cap before [`Self::cap_for_spin`]: the integrator's, or the shortest cap
@@ -707,7 +737,7 @@ impl<'m> Simulation<'m> {
             &self.sampler,
             self.all_pairs.as_deref(),
             self.modes.changed(),
-            &mut self.boxes,
+            (&mut self.boxes, &mut self.finder),
             &mut self.listed,
         )
         .map_err(|e| e.at(t))

@@ -165,6 +165,10 @@ pub struct Persistent {
     complete: bool,
     /// The complementarity solver of the mode selection.
     lcp: lcp::Solver,
+    /// The linear system of the closed points' modes, and its modes and reference forces.
+    system: lcp::ModeSystem,
+    modes: Vec<Mode>,
+    reference: Vec<Real>,
     /// The least and largest values of each closed point's force functions over the
     /// evaluations since the last [`Self::clear_bounds`] (see [`Self::force_functions`]):
     /// over the stages of a step, what the event location needs to know that a function
@@ -195,6 +199,9 @@ impl Persistent {
             points: Vec::new(),
             complete: true,
             lcp: lcp::Solver::new(),
+            system: lcp::ModeSystem::new(),
+            modes: Vec::new(),
+            reference: Vec::new(),
             bounds: Vec::new(),
         }
     }
@@ -389,20 +396,21 @@ impl Persistent {
                 message: "a closed contact point has no contact any more".to_owned(),
             });
         }
-        let modes: Vec<Mode> = self.closed.iter().map(|c| c.hold.mode()).collect();
-        let reference = DVector::from_iterator(
-            2 * self.closed.len(),
+        self.modes.clear();
+        self.modes.extend(self.closed.iter().map(|c| c.hold.mode()));
+        self.reference.clear();
+        (self.reference).extend(
             self.closed
                 .iter()
                 .flat_map(|c| [c.reference.0, c.reference.1]),
         );
-        let sol = lcp::forces_near(&self.a, &self.b, &self.mu, &modes, &reference).ok_or(
-            SimError::Contact {
+        let (x, _) = (self.system)
+            .forces_near(&self.a, &self.b, &self.mu, &self.modes, &self.reference)
+            .ok_or_else(|| SimError::Contact {
                 t,
                 message: "the forces of the closed contact points have no solution".to_owned(),
-            },
-        )?;
-        self.lambda = sol.x;
+            })?;
+        self.lambda.copy_from(x);
         // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ).
         let mut y_lambda = DVector::from_vec(std::mem::take(&mut self.column));
         y_lambda.gemv(1.0, &self.y, &self.lambda, 0.0);

@@ -52,6 +52,7 @@ mod regress;
 mod repair;
 mod scene;
 mod scene_check;
+mod sim_alloc;
 mod sim_bouncing_ball;
 mod sim_energy;
 mod sim_falling_rod;

@@ -223,6 +223,8 @@ pub struct MoreauJean<'m> {
     listed_modes: Vec<PairMode>,
     listed_slips: Vec<i8>,
     boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
+    /// Their hierarchy, kept between samples.
+    finder: crate::contact::broad::PairFinder,
     /// The mode of each pair in the current step.
     modes: PairMap<PairMode>,
     /// Steps taken; the run has `n_steps`.
@@ -310,6 +312,7 @@ impl<'m> MoreauJean<'m> {
             listed_modes: Vec::new(),
             listed_slips: Vec::new(),
             boxes: Vec::new(),
+            finder: Default::default(),
             modes: PairMap::new(PairMode::Free),
             k: 0,
             n_steps: 0,
@@ -796,7 +799,7 @@ impl<'m> MoreauJean<'m> {
             &self.sampler,
             self.all_pairs.as_deref(),
             self.modes.changed(),
-            &mut self.boxes,
+            (&mut self.boxes, &mut self.finder),
             &mut self.listed,
         )
         .map_err(|e| SimError::at(t, e))?;

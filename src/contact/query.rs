@@ -1,0 +1,97 @@
+//! parry2d's `query::contact` with its penetration fallback kept between calls.
+//!
+//! For two support-mapped shapes that overlap (capsule ends pressed into each other,
+//! a polygon corner sunk into a box), parry's GJK finds the origin inside their Minkowski
+//! difference and falls back on the expanding polytope algorithm (EPA), which it builds
+//! anew at every call: three allocations per query, in the loop's right-hand side and
+//! event functions (issue 16: no allocation in the loop). Here the EPA is a thread's own,
+//! reused (parry documents its reuse: `EPA::new`, "the same `EPA` instance can be reused
+//! for multiple queries"; `closest_points` clears it first). Everything else is parry's
+//! own code path, in parry's order of dispatch (`DefaultQueryDispatcher::contact`), so the
+//! results are parry's bit for bit.
+
+use std::cell::RefCell;
+
+use parry2d_f64::math::{Pose, Real, Vector};
+use parry2d_f64::query::epa::EPA;
+use parry2d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
+use parry2d_f64::query::{Contact, DefaultQueryDispatcher, QueryDispatcher, Unsupported};
+use parry2d_f64::shape::{HalfSpace, Shape, SupportMap};
+
+thread_local! {
+    /// The EPA of this thread's queries (see the module doc).
+    static KEPT_EPA: RefCell<EPA> = RefCell::new(EPA::new());
+}
+
+/// `parry2d_f64::query::contact(pos1, g1, pos2, g2, prediction)`, the same numbers, with
+/// the EPA of two overlapping support maps kept between calls.
+pub fn contact(
+    pos1: &Pose,
+    g1: &dyn Shape,
+    pos2: &Pose,
+    g2: &dyn Shape,
+    prediction: Real,
+) -> Result<Option<Contact>, Unsupported> {
+    let pos12 = pos1.inv_mul(pos2);
+    let mut result = match support_maps_only(g1, g2) {
+        Some((s1, s2)) => Ok(contact_support_maps(&pos12, s1, s2, prediction)),
+        None => DefaultQueryDispatcher.contact(&pos12, g1, g2, prediction),
+    };
+    if let Ok(Some(contact)) = &mut result {
+        contact.transform_by_mut(pos1, pos2);
+    }
+    result
+}
+
+/// The two shapes as support maps when parry's dispatcher would send them to its general
+/// support-map query: both support maps, and none of the pairs it tries first (two balls,
+/// a half-space and a support map, a ball and a convex shape).
+fn support_maps_only<'a>(
+    g1: &'a dyn Shape,
+    g2: &'a dyn Shape,
+) -> Option<(&'a dyn SupportMap, &'a dyn SupportMap)> {
+    let (ball1, ball2) = (g1.as_ball().is_some(), g2.as_ball().is_some());
+    let first = (ball1 && ball2)
+        || g1.as_shape::<HalfSpace>().is_some()
+        || g2.as_shape::<HalfSpace>().is_some()
+        || (ball1 && g2.is_convex())
+        || (g1.is_convex() && ball2);
+    if first {
+        return None;
+    }
+    Some((g1.as_support_map()?, g2.as_support_map()?))
+}
+
+/// parry's `contact_support_map_support_map` (GJK, then EPA inside the difference), with
+/// the thread's kept EPA.
+fn contact_support_maps(
+    pos12: &Pose,
+    g1: &dyn SupportMap,
+    g2: &dyn SupportMap,
+    prediction: Real,
+) -> Option<Contact> {
+    let simplex = &mut VoronoiSimplex::new();
+    let dir = (pos12.translation).try_normalize().unwrap_or(Vector::X);
+    simplex.reset(CsoPoint::from_shapes(pos12, g1, g2, dir));
+    let mut cpts = gjk::closest_points(pos12, g1, g2, prediction, true, simplex);
+    if cpts == GJKResult::Intersection {
+        cpts = KEPT_EPA
+            .with(|epa| match epa.try_borrow_mut() {
+                Ok(mut epa) => epa.closest_points(pos12, g1, g2, simplex),
+                // Never nested; a fresh one if it were.
+                Err(_) => EPA::new().closest_points(pos12, g1, g2, simplex),
+            })
+            .map_or(GJKResult::NoIntersection(Vector::X), |(p1, p2, n)| {
+                GJKResult::ClosestPoints(p1, p2, n)
+            });
+    }
+    match cpts {
+        GJKResult::ClosestPoints(point1, point2_1, normal1) => {
+            let dist = (point2_1 - point1).dot(normal1);
+            let point2 = pos12.inverse_transform_point(point2_1);
+            let normal2 = pos12.rotation.inverse() * -normal1;
+            Some(Contact::new(point1, point2, normal1, normal2, dist))
+        }
+        _ => None,
+    }
+}
