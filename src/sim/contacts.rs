@@ -967,7 +967,7 @@ impl Simulation<'_> {
                 });
         let mu: Vec<Real> = closed.iter().map(|c| self.material(c.pair).mu).collect();
         self.system.persistent.set(closed.clone(), mu.clone());
-        self.gaps.persistent.set(closed, mu);
+        self.gaps.set_closed(closed, mu);
         // The pairs whose mode may change: closed now, not free before, pending or
         // accumulating (every other pair stays free).
         let mut pairs: Vec<PairId> = (self.gaps.persistent.closed().iter())

@@ -1,7 +1,7 @@
 //! The event functions of the loop: the gaps of open contacts, and the forces and slips of
 //! closed ones.
 
-use super::persistent::{Hold, Persistent, PointScratch};
+use super::persistent::{Evaluation, Hold, Persistent, PointScratch};
 use super::{AtTime, Nested, Scales};
 use crate::contact::{PairContact, pair_contact, signed_gap};
 use crate::dynamics::forward_dynamics;
@@ -64,6 +64,9 @@ pub struct GapFunctions<'m> {
     /// The force functions that cannot reach zero in the current step (see
     /// [`StandIns`]).
     stand_ins: StandIns,
+    /// The right-hand side's evaluation of the closed points at the end of the step, if
+    /// it has one (see [`Self::take_end_evaluation`]).
+    end: Evaluation,
 }
 
 /// Stand-ins for the force functions of the closed points at the interior samples of a
@@ -107,6 +110,9 @@ pub struct StandInCounts {
     pub used: u64,
     /// Steps located again because an exact value broke a stand-in's bound.
     pub relocated: u64,
+    /// Exact samples that took the right-hand side's evaluation of the step's end (see
+    /// [`GapFunctions::take_end_evaluation`]) instead of solving the forces again.
+    pub taken: u64,
 }
 
 #[derive(Default)]
@@ -182,7 +188,35 @@ impl<'m> GapFunctions<'m> {
             disarmed: Vec::new(),
             memo: Memo::default(),
             stand_ins: StandIns::default(),
+            end: Evaluation::default(),
         }
+    }
+
+    /// Takes the last evaluation of the ODE system's closed points (the same closed
+    /// points as these), to be used if the event functions are asked for that state: the
+    /// last stage of a DOPRI5 step is its end state, where the locator samples them too.
+    /// The same numbers, without solving the same forces twice. Call before the location
+    /// of a step, and [`Self::drop_end_evaluation`] after it.
+    pub fn take_end_evaluation(&mut self, system: &mut Persistent) {
+        if self.stand_ins.off {
+            return;
+        }
+        system.trade_evaluation(&mut self.end);
+        // What the system got back is stale: it computes its own at its next evaluation.
+        system.forget_evaluation();
+    }
+
+    /// Replaces the closed points (`mu` from their pairs, after overrides), with room for
+    /// their evaluations ([`Persistent::set`]).
+    pub fn set_closed(&mut self, closed: Vec<super::Closed>, mu: Vec<Real>) {
+        let k = closed.len();
+        self.persistent.set(closed, mu);
+        self.end.fit(k, self.model.nq() + self.model.nu());
+    }
+
+    /// Forgets the evaluation taken by [`Self::take_end_evaluation`].
+    pub fn drop_end_evaluation(&mut self) {
+        self.end.forget();
     }
 
     /// Starts the event location of a step whose right-hand sides gave the force
@@ -207,7 +241,8 @@ impl<'m> GapFunctions<'m> {
         self.stand_ins.failed
     }
 
-    /// Allows the stand-ins (the default) or forbids them.
+    /// Allows the stand-ins and the taking of the right-hand side's evaluation of a step's
+    /// end (the default), or forbids both: every sample then solves the forces.
     pub fn set_stand_ins(&mut self, on: bool) {
         self.stand_ins.off = !on;
     }
@@ -330,8 +365,16 @@ impl GapFunctions<'_> {
         let (q, u) = (&y[..n], &y[n..nqu]);
         // Unarmed functions hold a positive value.
         g.fill(self.scales.length);
-        if self.persistent.closed().is_empty() {
+        let taken = self.persistent.can_take(&self.end, (t, q, u));
+        if self.persistent.closed().is_empty() || taken {
             update_positions(model, &mut self.data, t, q).map_err(|e| Nested::from(e.at(t)))?;
+            if taken {
+                // The right-hand side's evaluation of this very state (see
+                // `take_end_evaluation`).
+                self.persistent.trade_evaluation(&mut self.end);
+                self.end.forget();
+                self.stand_ins.counts.taken += 1;
+            }
         } else {
             forward_dynamics(model, &mut self.data, t, q, u).map_err(|e| Nested::from(e.at(t)))?;
             self.persistent

@@ -216,9 +216,10 @@ impl<'m> Simulation<'m> {
     }
 
     /// Allows (the default) or forbids the stand-ins of the force functions at the
-    /// interior samples of the event location (see `gaps::StandIns`). Forbidden, every
-    /// sample solves the constrained dynamics: the runs must be the same bit for bit (the
-    /// oracle of `tests/all/events.rs`).
+    /// interior samples of the event location (see `gaps::StandIns`) and the taking of the
+    /// right-hand side's forces at a step's end (`GapFunctions::take_end_evaluation`).
+    /// Forbidden, every sample solves the constrained dynamics: the runs must be the same
+    /// bit for bit (the oracle of `tests/all/event_stand_ins.rs`).
     pub fn set_stand_ins(&mut self, on: bool) {
         self.gaps.set_stand_ins(on);
     }
@@ -602,6 +603,14 @@ impl<'m> Simulation<'m> {
     /// within `1e-12 (1 + |t|)` of its end; then `None`: the contact stage must select
     /// the modes again there.
     fn locate(&mut self) -> Result<Option<Option<Event>>, SimError> {
+        self.gaps.take_end_evaluation(&mut self.system.persistent);
+        let located = self.locate_events();
+        self.gaps.drop_end_evaluation();
+        located
+    }
+
+    /// [`Self::locate`] itself.
+    fn locate_events(&mut self) -> Result<Option<Option<Event>>, SimError> {
         loop {
             self.gaps.begin_step(self.system.persistent.bounds());
             let mut located = self

@@ -33,7 +33,7 @@ use crate::contact::{
 use crate::dynamics::coordinate_rates;
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
-use crate::linalg::dot;
+use crate::linalg::{dot, fit_matrix, fit_vector};
 use crate::math::{Pose, Real, Vec2};
 use crate::model::{Model, PairId};
 use crate::state::Data;
@@ -126,6 +126,53 @@ fn body_pose_of_a(model: &Model, data: &Data, pair: PairId) -> Pose {
     }
 }
 
+/// The results of the last evaluation of the closed points' constrained dynamics
+/// ([`Persistent::accelerate`]), with the state it was at. It can be handed from one
+/// [`Persistent`] to another of the same closed points
+/// ([`Persistent::trade_evaluation`]): the event functions take the right-hand side's
+/// evaluation at the end of a step (DOPRI5's last stage is the step's end state) instead
+/// of solving the same forces again.
+#[derive(Clone, Debug, Default)]
+pub struct Evaluation {
+    /// The time and `[q; u]` evaluated; `None` unless an evaluation completed.
+    at: Option<Real>,
+    qu: Vec<Real>,
+    /// `A = J M⁻¹ Jᵀ = Yᵀ Y` (2k × 2k, symmetric).
+    a: DMatrix<Real>,
+    /// The forces `λ` (2k).
+    lambda: DVector<Real>,
+    /// The points.
+    points: Vec<Point>,
+    /// Whether it found every closed point.
+    complete: bool,
+}
+
+impl Evaluation {
+    /// Whether it is the evaluation of `(t, q, u)` for `k` closed points.
+    fn is_at(&self, t: Real, q: &[Real], u: &[Real], k: usize) -> bool {
+        self.at == Some(t)
+            && self.lambda.len() == 2 * k
+            && self.qu.len() == q.len() + u.len()
+            && self.qu[..q.len()] == *q
+            && self.qu[q.len()..] == *u
+    }
+
+    /// Forgets the state it was at.
+    pub fn forget(&mut self) {
+        self.at = None;
+    }
+
+    /// Gives it room for `k` closed points of a model with `n` coordinates and speeds, so
+    /// that a [`Persistent`] that takes it in trade allocates nothing.
+    pub fn fit(&mut self, k: usize, n: usize) {
+        fit_matrix(&mut self.a, 2 * k, 2 * k);
+        fit_vector(&mut self.lambda, 2 * k);
+        self.points.reserve(k.saturating_sub(self.points.len()));
+        self.qu.reserve(n.saturating_sub(self.qu.len()));
+        self.at = None;
+    }
+}
+
 /// Scratch and results of the constrained dynamics of a set of closed points.
 pub struct Persistent {
     /// The closed points.
@@ -153,16 +200,10 @@ pub struct Persistent {
     /// `Y = F⁻¹ Jᵀ` (nu × 2k) for the factor `M = F Fᵀ` of the mass matrix
     /// ([`crate::dynamics::MassFactor::solve_factor_in_place`]).
     y: DMatrix<Real>,
-    /// `A = J M⁻¹ Jᵀ = Yᵀ Y` (2k × 2k, symmetric).
-    a: DMatrix<Real>,
     /// `b = J u̇_free + c` (2k).
     b: DVector<Real>,
-    /// The forces `λ` (2k) of the last evaluation.
-    lambda: DVector<Real>,
-    /// The points of the last evaluation.
-    points: Vec<Point>,
-    /// Whether the last evaluation found every closed point.
-    complete: bool,
+    /// The last evaluation: `A`, the forces, the points.
+    ev: Evaluation,
     /// The complementarity solver of the mode selection.
     lcp: lcp::Solver,
     /// The linear system of the closed points' modes, and its modes and reference forces.
@@ -193,11 +234,11 @@ impl Persistent {
             c: DVector::zeros(0),
             jac: DMatrix::zeros(0, nu),
             y: DMatrix::zeros(nu, 0),
-            a: DMatrix::zeros(0, 0),
             b: DVector::zeros(0),
-            lambda: DVector::zeros(0),
-            points: Vec::new(),
-            complete: true,
+            ev: Evaluation {
+                complete: true,
+                ..Evaluation::default()
+            },
             lcp: lcp::Solver::new(),
             system: lcp::ModeSystem::new(),
             modes: Vec::new(),
@@ -218,11 +259,12 @@ impl Persistent {
         self.mu = mu;
         self.jac = DMatrix::zeros(2 * k, nu);
         self.y = DMatrix::zeros(nu, 2 * k);
-        self.a = DMatrix::zeros(2 * k, 2 * k);
         self.b = DVector::zeros(2 * k);
         self.c = DVector::zeros(2 * k);
-        self.lambda = DVector::zeros(2 * k);
-        self.points.clear();
+        self.ev.a = DMatrix::zeros(2 * k, 2 * k);
+        self.ev.lambda = DVector::zeros(2 * k);
+        self.ev.points.clear();
+        self.ev.at = None;
         self.clear_bounds();
     }
 
@@ -330,8 +372,12 @@ impl Persistent {
         (t, q, u): (Real, &[Real], &[Real]),
     ) -> Result<(), SimError> {
         let k = self.closed.len();
-        self.points.clear();
-        self.complete = true;
+        let ev = &mut self.ev;
+        ev.at = None;
+        fit_matrix(&mut ev.a, 2 * k, 2 * k);
+        fit_vector(&mut ev.lambda, 2 * k);
+        ev.points.clear();
+        ev.complete = true;
         for i in 0..k {
             let Closed { pair, local, .. } = self.closed[i];
             match self
@@ -343,10 +389,10 @@ impl Persistent {
                         self.jac[(2 * i, r)] = self.eval.j_n[r];
                         self.jac[(2 * i + 1, r)] = self.eval.j_t[r];
                     }
-                    self.points.push(p);
+                    self.ev.points.push(p);
                 }
                 None => {
-                    self.complete = false;
+                    self.ev.complete = false;
                     return Ok(());
                 }
             }
@@ -367,8 +413,8 @@ impl Persistent {
             let yi = self.y.column(i);
             for j in 0..=i {
                 let v = dot(yi.as_slice(), self.y.column(j).as_slice());
-                self.a[(i, j)] = v;
-                self.a[(j, i)] = v;
+                self.ev.a[(i, j)] = v;
+                self.ev.a[(j, i)] = v;
             }
         }
         self.b.copy_from(&self.c);
@@ -390,7 +436,7 @@ impl Persistent {
         }
         let t = state.0;
         self.assemble(model, data, state)?;
-        if !self.complete {
+        if !self.ev.complete {
             return Err(SimError::Contact {
                 t,
                 message: "a closed contact point has no contact any more".to_owned(),
@@ -405,15 +451,15 @@ impl Persistent {
                 .flat_map(|c| [c.reference.0, c.reference.1]),
         );
         let (x, _) = (self.system)
-            .forces_near(&self.a, &self.b, &self.mu, &self.modes, &self.reference)
+            .forces_near(&self.ev.a, &self.b, &self.mu, &self.modes, &self.reference)
             .ok_or_else(|| SimError::Contact {
                 t,
                 message: "the forces of the closed contact points have no solution".to_owned(),
             })?;
-        self.lambda.copy_from(x);
+        self.ev.lambda.copy_from(x);
         // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ).
         let mut y_lambda = DVector::from_vec(std::mem::take(&mut self.column));
-        y_lambda.gemv(1.0, &self.y, &self.lambda, 0.0);
+        y_lambda.gemv(1.0, &self.y, &self.ev.lambda, 0.0);
         let solved = (data.mass_factor).solve_factor_transpose_in_place(y_lambda.as_mut_slice());
         self.column = y_lambda.data.into();
         solved.map_err(|e| e.at(t))?;
@@ -426,7 +472,29 @@ impl Persistent {
                 *b = (b.0.min(v), b.1.max(v));
             }
         }
+        let (_, q, u) = state;
+        self.ev.qu.clear();
+        self.ev.qu.extend_from_slice(q);
+        self.ev.qu.extend_from_slice(u);
+        self.ev.at = Some(t);
         Ok(())
+    }
+
+    /// Exchanges the last evaluation with `other` (of the same closed points, or to be
+    /// forgotten): see [`Evaluation`].
+    pub fn trade_evaluation(&mut self, other: &mut Evaluation) {
+        std::mem::swap(&mut self.ev, other);
+    }
+
+    /// Forgets the state of the last evaluation (its numbers are no longer to be taken).
+    pub fn forget_evaluation(&mut self) {
+        self.ev.forget();
+    }
+
+    /// Whether `ev` is an evaluation of these closed points at `(t, q, u)` (it must come
+    /// from a [`Persistent`] with the same closed points).
+    pub fn can_take(&self, ev: &Evaluation, (t, q, u): (Real, &[Real], &[Real])) -> bool {
+        ev.is_at(t, q, u, self.closed.len())
     }
 
     /// Drops the slip margin of each point that started to slide from rest and has got
@@ -434,10 +502,10 @@ impl Persistent {
     /// `V_t = 0`, on time. The function drops from `s V_t + margin` to `s V_t`, both
     /// positive: no crossing is made. Call between steps.
     pub fn release_margins(&mut self) {
-        if self.points.len() != self.closed.len() {
+        if self.ev.points.len() != self.closed.len() {
             return;
         }
-        for (c, p) in self.closed.iter_mut().zip(&self.points) {
+        for (c, p) in self.closed.iter_mut().zip(&self.ev.points) {
             if let Hold::Slide(s) = c.hold
                 && c.slip_margin > 0.0
                 && s * p.v_t > 2.0 * c.slip_margin
@@ -454,12 +522,12 @@ impl Persistent {
 
     /// The forces `(λ_n, λ_t)` of closed point `i` at the last evaluation (N).
     pub fn force(&self, i: usize) -> (Real, Real) {
-        (self.lambda[2 * i], self.lambda[2 * i + 1])
+        (self.ev.lambda[2 * i], self.ev.lambda[2 * i + 1])
     }
 
     /// The points of the last evaluation.
     pub fn points(&self) -> &[Point] {
-        &self.points
+        &self.ev.points
     }
 
     /// The Painlevé coefficient of closed point `i` when it slides: its own normal
@@ -468,15 +536,17 @@ impl Persistent {
     /// of its slip). Non-positive: sliding cannot be held by a pushing force.
     pub fn painleve(&self, i: usize) -> Real {
         match self.closed[i].hold {
-            Hold::Slide(s) => self.a[(2 * i, 2 * i)] - self.mu[i] * s * self.a[(2 * i, 2 * i + 1)],
+            Hold::Slide(s) => {
+                self.ev.a[(2 * i, 2 * i)] - self.mu[i] * s * self.ev.a[(2 * i, 2 * i + 1)]
+            }
             Hold::Stick => Real::INFINITY,
         }
     }
 
     /// The power of the contact forces on the system, `Σ λ_n V_n + λ_t V_t` (W).
     pub fn power(&self) -> Real {
-        (self.points.iter().enumerate())
-            .map(|(i, p)| self.lambda[2 * i] * p.v_n + self.lambda[2 * i + 1] * p.v_t)
+        (self.ev.points.iter().enumerate())
+            .map(|(i, p)| self.ev.lambda[2 * i] * p.v_n + self.ev.lambda[2 * i + 1] * p.v_t)
             .sum()
     }
 
@@ -505,7 +575,7 @@ impl Persistent {
             .collect();
         self.set(closed, candidates.iter().map(|c| c.mu).collect());
         self.assemble(model, data, state)?;
-        let allowed: Vec<Allowed> = (self.points.iter().zip(candidates))
+        let allowed: Vec<Allowed> = (self.ev.points.iter().zip(candidates))
             .map(|(p, c)| Allowed {
                 mu: c.mu,
                 open: true,
@@ -515,7 +585,7 @@ impl Persistent {
             })
             .collect();
         // No solution (Lemke's ray) is Painlevé's inconsistency for the caller to resolve.
-        let solutions = match lcp::solutions(&mut self.lcp, &self.a, &self.b, &allowed) {
+        let solutions = match lcp::solutions(&mut self.lcp, &self.ev.a, &self.b, &allowed) {
             Ok(all) => all,
             Err(lcp::LcpError::NoSolution { .. }) => Vec::new(),
             Err(e) => {
@@ -527,12 +597,14 @@ impl Persistent {
         };
         let painleve: Vec<Real> = (0..candidates.len())
             .map(|i| match allowed[i].slip {
-                Some(s) => self.a[(2 * i, 2 * i)] - allowed[i].mu * s * self.a[(2 * i, 2 * i + 1)],
+                Some(s) => {
+                    self.ev.a[(2 * i, 2 * i)] - allowed[i].mu * s * self.ev.a[(2 * i, 2 * i + 1)]
+                }
                 None => Real::INFINITY,
             })
             .collect();
         Ok(Selection {
-            points: self.points.clone(),
+            points: self.ev.points.clone(),
             free: (0..candidates.len()).map(|i| self.b[2 * i]).collect(),
             solutions,
             painleve,

@@ -2,8 +2,10 @@
 //! (issues 15 and 16, `src/sim/gaps.rs`, `StandIns`): a step whose force functions
 //! (`λ_n`, the friction margins, the Painlevé coefficients of the closed points) cannot
 //! reach zero, by their values at the step's start and stages, samples only the kinematic
-//! functions inside it instead of solving the constrained dynamics at each sample. It must
-//! change nothing: every run here equals, bit for bit (impacts, messages, transitions,
+//! functions inside it instead of solving the constrained dynamics at each sample; and the
+//! sample at a step's end takes the forces the right-hand side solved at DOPRI5's last
+//! stage, the same state (`GapFunctions::take_end_evaluation`). Neither may
+//! change anything: every run here equals, bit for bit (impacts, messages, transitions,
 //! samples, final state, counters), the same run with every sample computed
 //! (`Simulation::set_stand_ins(false)`), and the stand-ins were used.
 
@@ -38,6 +40,7 @@ fn same_with_and_without(name: &str, scene: &Scene) -> StandInCounts {
     let (rec, summary, used) = run(scene, true);
     let (oracle, oracle_summary, none) = run(scene, false);
     assert_eq!(none.used, 0, "{name}: stand-ins used while forbidden");
+    assert_eq!(none.taken, 0, "{name}: an evaluation taken while forbidden");
     assert_eq!(none.samples, used.samples, "{name}: other samples");
     assert_eq!(
         format!("{summary:?}"),
@@ -105,6 +108,8 @@ fn the_pendulum_and_the_chain_on_the_floor_are_the_same_bit_for_bit() {
     // Sliding on the floor from 0.19 s on, far from lift-off: most interior samples skip
     // the constrained dynamics (measured: all 664).
     assert!(4 * c.used >= 3 * c.samples, "kane 5 s: {c:?}");
+    // DOPRI5's last stage is the step's end: each step of the sliding phase takes it.
+    assert!(c.taken > 100, "kane 5 s: {c:?}");
 
     let mut chain = scene("tests/data/chain_floor.toml");
     chain.settings.t_end = 1.0;
