@@ -230,6 +230,11 @@ impl<'m> Simulation<'m> {
         self.gaps.stand_in_counts()
     }
 
+    /// The closed contact points in persistent contact now, with their modes.
+    pub fn closed_points(&self) -> &[Closed] {
+        self.gaps.persistent.closed()
+    }
+
     /// The scales used for tolerances (length, resting speed).
     pub fn scales(&self) -> Scales {
         self.scales
