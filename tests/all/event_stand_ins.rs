@@ -111,7 +111,7 @@ fn the_pendulum_and_the_chain_on_the_floor_are_the_same_bit_for_bit() {
     // DOPRI5's last stage is the step's end: each step of the sliding phase takes it.
     assert!(c.taken > 100, "kane 5 s: {c:?}");
 
-    let mut chain = scene("tests/data/chain_floor.toml");
+    let mut chain = scene("scenes/chain_floor.toml");
     chain.settings.t_end = 1.0;
     let c = same_with_and_without("chain_floor 1 s", &chain);
     println!("chain_floor 1 s: {c:?}");

@@ -657,7 +657,7 @@ fn gauss_seidel_agrees_with_the_enumeration_with_friction() {
     );
 }
 
-/// The 32-link chain falling on the floor (`tests/data/chain_floor.toml`, issue 15):
+/// The 32-link chain falling on the floor (`scenes/chain_floor.toml`, issue 15):
 /// event-driven and Moreau–Jean agree within Moreau–Jean's first-order error. Before the
 /// chain reaches the floor (t = 0.4 s) the event-driven run at rtol 1e-10 is the
 /// reference: Moreau–Jean's largest joint-angle error halves with its step (measured
@@ -668,7 +668,7 @@ fn gauss_seidel_agrees_with_the_enumeration_with_friction() {
 /// `the_32_link_chain_rests_alike_event_driven_and_time_stepped`.
 #[test]
 fn the_32_link_chain_converges_to_the_event_driven_run_at_first_order_before_the_floor() {
-    let path = format!("{}/tests/data/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/scenes/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
     let mut scene = ricochet::scene::load(&path).unwrap();
     scene.settings.t_end = 0.4;
     let mut ed =
@@ -724,7 +724,7 @@ fn chain_hinges(q: &[f64]) -> Vec<(f64, f64)> {
 #[test]
 #[ignore]
 fn the_32_link_chain_rests_alike_event_driven_and_time_stepped() {
-    let path = format!("{}/tests/data/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/scenes/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
     let scene = ricochet::scene::load(&path).unwrap();
     assert_eq!(scene.settings.t_end, 5.0);
     let (m, g, l) = (0.05, G, 0.1);

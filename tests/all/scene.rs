@@ -23,7 +23,7 @@ fn load(name: &str) -> Scene {
     scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
-const SCENES: [(&str, &[&str]); 13] = [
+const SCENES: [(&str, &[&str]); 14] = [
     ("kane_double_pendulum", &["rodA.q", "rodB.q"]),
     ("pendulum_wall", &["pendulum.q"]),
     ("falling_rod", &["rod.x", "rod.y", "rod.theta"]),
@@ -41,6 +41,16 @@ const SCENES: [(&str, &[&str]); 13] = [
         &["wagon.x", "wagon.y", "wagon.theta", "front.q"],
     ),
     ("sled_rock", &["sled.x", "sled.y", "sled.theta"]),
+    (
+        "chain_floor",
+        &[
+            "link1.q", "link2.q", "link3.q", "link4.q", "link5.q", "link6.q", "link7.q", "link8.q",
+            "link9.q", "link10.q", "link11.q", "link12.q", "link13.q", "link14.q", "link15.q",
+            "link16.q", "link17.q", "link18.q", "link19.q", "link20.q", "link21.q", "link22.q",
+            "link23.q", "link24.q", "link25.q", "link26.q", "link27.q", "link28.q", "link29.q",
+            "link30.q", "link31.q", "link32.q",
+        ],
+    ),
     (
         "newtons_cradle",
         &["ball1.q", "ball2.q", "ball3.q", "ball4.q", "ball5.q"],

@@ -139,5 +139,5 @@ fn one_sliding_point_allocates_nothing() {
 fn several_closed_points_allocate_nothing() {
     assert_quiet("scenes/falling_rod.toml", 3.0, 100.0, 1.0, 100);
     assert_quiet("scenes/chain.toml", 3.0, 200.0, 0.5, 100);
-    assert_quiet("tests/data/chain_floor.toml", 1.0, 200.0, 0.5, 20);
+    assert_quiet("scenes/chain_floor.toml", 1.0, 200.0, 0.5, 20);
 }

@@ -580,7 +580,7 @@ fn a_chain_of_16_links_gets_past_an_impact_of_more_than_six_points() {
     );
 }
 
-/// The 32-link chain falling on the floor (issue 15; `tests/data/chain_floor.toml`: links of
+/// The 32-link chain falling on the floor (issue 15; `scenes/chain_floor.toml`: links of
 /// 0.1 m, 50 g, capsules of radius 1 cm, e = 0.2, μ = 0.4, released horizontally 1 m above
 /// the floor), to 1.2 s: past two impacts that stopped it (t = 0.5644 s, 28 points: Lemke's
 /// ray along d = 1; t = 1.1228 s, 29 points: its pivot limit — both solved along the next
@@ -599,7 +599,7 @@ fn a_chain_of_16_links_gets_past_an_impact_of_more_than_six_points() {
 /// (the capsules' axis at y = −0.99 m) to 1e-9 m.
 #[test]
 fn a_chain_of_32_links_lands_and_lies_on_the_floor_in_few_steps() {
-    let path = format!("{}/tests/data/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{}/scenes/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
     let mut scene = ricochet::scene::load(&path).unwrap();
     scene.settings.t_end = 1.2;
     let (rec, summary, _) = run(&scene, MaterialOverride::default());
