@@ -11,7 +11,7 @@ use parry2d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 
 use crate::kinematics::{KinematicsError, collider_pose};
-use crate::math::Real;
+use crate::math::{Real, Vec2};
 use crate::model::{ColliderId, Model, PairId};
 use crate::state::Data;
 
@@ -36,8 +36,21 @@ pub fn collider_boxes(
 /// overlap, in pair order.
 pub fn overlapping_pairs(model: &Model, boxes: &[Aabb]) -> Vec<PairId> {
     let mut out = Vec::new();
-    PairFinder::default().overlapping_pairs(model, boxes, &mut out);
+    PairFinder::default().overlapping_pairs(model, (boxes, &[]), &mut out);
     out
+}
+
+/// The region `{x : n·x ≤ offset}` of a half-space collider, `Some((n, offset))`, for
+/// [`PairFinder::overlapping_pairs`]; `None` for a collider without one.
+pub type HalfPlane = Option<(Vec2, Real)>;
+
+/// Whether `aabb` reaches the region `{x : n·x ≤ offset}`: its lowest corner along `n`.
+fn reaches(aabb: &Aabb, (n, offset): (Vec2, Real)) -> bool {
+    let corner = Vec2::new(
+        if n.x >= 0.0 { aabb.mins.x } else { aabb.maxs.x },
+        if n.y >= 0.0 { aabb.mins.y } else { aabb.maxs.y },
+    );
+    n.dot(corner) <= offset
 }
 
 /// [`overlapping_pairs`] with its hierarchy kept between calls: the simulation loop asks
@@ -58,8 +71,17 @@ impl PairFinder {
     /// Calls between two rebuilds of the tree.
     pub const REBUILD: usize = 64;
 
-    /// The pairs whose boxes overlap into `out` (cleared first), in pair order.
-    pub fn overlapping_pairs(&mut self, model: &Model, boxes: &[Aabb], out: &mut Vec<PairId>) {
+    /// The pairs whose boxes overlap into `out` (cleared first), in pair order. `planes`
+    /// (one per collider, or empty) gives the region of a half-space collider,
+    /// `{x : n·x ≤ offset}` (its box is the whole plane): its pairs are those whose other
+    /// box reaches that region.
+    pub fn overlapping_pairs(
+        &mut self,
+        model: &Model,
+        (boxes, planes): (&[Aabb], &[HalfPlane]),
+        out: &mut Vec<PairId>,
+    ) {
+        let plane = |k: usize| planes.get(k).copied().flatten();
         let n = boxes.len();
         if self.bvh.leaf_count() as usize != n || self.calls >= Self::REBUILD {
             if self.bvh.leaf_count() as usize == n {
@@ -85,7 +107,13 @@ impl PairFinder {
         for (i, aabb) in boxes.iter().enumerate() {
             for j in self.bvh.intersect_aabb(aabb) {
                 let j = j as usize;
+                let in_region = match (plane(i), plane(j)) {
+                    (Some(h), None) => reaches(&boxes[j], h),
+                    (None, Some(h)) => reaches(aabb, h),
+                    _ => true,
+                };
                 if j > i
+                    && in_region
                     && let Some(p) = model.pair_between(ColliderId(i), ColliderId(j))
                 {
                     out.push(p);

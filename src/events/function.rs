@@ -28,6 +28,34 @@ pub trait EventFunctions {
         self.values(t, y, g)
     }
 
+    /// `gᵢ(t, y)` of the one function `i` (a root or extremum search follows one
+    /// function): the same number as [`values`](EventFunctions::values) gives it. The
+    /// default computes them all into `g` (of length `m`) and returns `g[i]`.
+    fn value(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        i: usize,
+        g: &mut [Real],
+    ) -> Result<Real, Self::Error> {
+        self.values(t, y, g)?;
+        Ok(g[i])
+    }
+
+    /// `ġᵢ(t, y)` of the one function `i`, if the rates are available: the same number as
+    /// [`rates`](EventFunctions::rates) gives it. The default computes them all into
+    /// `g_dot` (of length `m`).
+    fn rate(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        dy: &[Real],
+        i: usize,
+        g_dot: &mut [Real],
+    ) -> Result<Option<Real>, Self::Error> {
+        Ok(self.rates(t, y, dy, g_dot)?.then(|| g_dot[i]))
+    }
+
     /// Writes `ġᵢ(t, y)` into `g_dot` given `ẏ = dy` and returns `Ok(true)`, or returns
     /// `Ok(false)` if the rates are not available (the default).
     fn rates(

@@ -167,6 +167,44 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
             .map_err(|source| EventError::Function { t, source })
     }
 
+    /// `gᵢ(t)` of the one function `i` (see [`EventFunctions::value`]).
+    fn value(&mut self, t: Real, i: usize) -> Result<Real, EventError<G::Error>> {
+        self.state_at(t);
+        self.counters.value_evals += 1;
+        self.funcs
+            .value(t, &self.s.y, i, &mut self.s.g)
+            .map_err(|source| EventError::Function { t, source })
+    }
+
+    /// `ġᵢ(t)` of the one function `i`; [`value`](Self::value) at the same `t` must come
+    /// just before. The caller's rate if it has rates, else the one-sided difference of
+    /// [`rates`](Self::rates).
+    fn rate(&mut self, t: Real, i: usize) -> Result<Real, EventError<G::Error>> {
+        let st = self.stepper;
+        if t == st.t() {
+            self.s.dy.copy_from_slice(st.dy());
+        } else if t == st.t_prev() {
+            self.s.dy.copy_from_slice(st.dy_prev());
+        } else {
+            st.dense_derivative(t, &mut self.s.dy);
+        }
+        let given = self
+            .funcs
+            .rate(t, &self.s.y, &self.s.dy, i, &mut self.s.gd)
+            .map_err(|source| EventError::Function { t, source })?;
+        match given {
+            Some(gd) => {
+                self.counters.rate_evals += 1;
+                Ok(gd)
+            }
+            None => {
+                self.values(t)?;
+                self.rates(t)?;
+                Ok(self.s.gd[i])
+            }
+        }
+    }
+
     /// The caller's `ġ(t)` into `scratch.gd`, if it has rates; `y` must hold the state
     /// at `t` ([`values`](Self::values) at the same `t` just before).
     pub(crate) fn caller_rates(&mut self, t: Real) -> Result<bool, EventError<G::Error>> {
@@ -543,8 +581,7 @@ pub(crate) fn root<St: Stepper, G: EventFunctions>(
     let h = sp.stepper.t() - sp.stepper.t_prev();
     let solved = illinois(
         |t| {
-            sp.values(t)?;
-            let g = sp.s.g[i];
+            let g = sp.value(t, i)?;
             if g.is_finite() {
                 Ok(Probe::Value(g))
             } else {
@@ -598,8 +635,7 @@ fn extremum<St: Stepper, G: EventFunctions>(
     let mut crossed = Real::NAN;
     let solved = illinois(
         |t| {
-            sp.values(t)?;
-            let g = sp.s.g[i];
+            let g = sp.value(t, i)?;
             let other_side = match kind {
                 Extremum::Min => g <= 0.0,
                 Extremum::Max => g > 0.0,
@@ -608,8 +644,7 @@ fn extremum<St: Stepper, G: EventFunctions>(
                 crossed = g;
                 return Ok(Probe::Stop);
             }
-            sp.rates(t)?;
-            let gd = sp.s.gd[i];
+            let gd = sp.rate(t, i)?;
             if !gd.is_finite() {
                 return Err(EventError::NonFinite { t, index: i });
             }

@@ -77,42 +77,57 @@ pub(super) fn reach(model: &Model, data: &Data, c: ColliderId) -> (Real, Real, R
 }
 
 /// The box of every collider at the positions of `data`, grown by `margin(V_c)` (m), into
-/// `boxes` (one per collider). A margin that is not finite grows the box to the whole
-/// plane (the collider is a candidate with every other).
+/// `boxes` (one per collider), and the grown region of every half-space into `planes`
+/// (see [`Plane`]). A margin that is not finite grows the box to the whole plane (the
+/// collider is a candidate with every other).
 pub(super) fn grown_boxes(
     model: &Model,
     data: &Data,
-    boxes: &mut Vec<Aabb>,
+    (boxes, planes): (&mut Vec<Aabb>, &mut Vec<Plane>),
     margin: impl Fn(Real) -> Real,
 ) -> Result<(), KinematicsError> {
     boxes.clear();
+    planes.clear();
     for c in model.collider_ids() {
-        boxes.push(grown_box(model, data, c, &margin)?);
+        let (b, p) = grown_box(model, data, c, &margin)?;
+        boxes.push(b);
+        planes.push(p);
     }
     Ok(())
 }
 
-/// Grows each of `boxes` to hold the collider's box at the positions of `data`, itself
-/// grown by `margin(V_c)`.
+/// Grows each of `boxes` (and `planes`) to hold the collider's box (region) at the
+/// positions of `data`, itself grown by `margin(V_c)`.
 pub(super) fn sweep_boxes(
     model: &Model,
     data: &Data,
-    boxes: &mut [Aabb],
+    (boxes, planes): (&mut [Aabb], &mut [Plane]),
     margin: impl Fn(Real) -> Real,
 ) -> Result<(), KinematicsError> {
     for (k, c) in model.collider_ids().enumerate() {
-        let b = grown_box(model, data, c, &margin)?;
+        let (b, p) = grown_box(model, data, c, &margin)?;
         boxes[k].merge(&b);
+        planes[k] = match (planes[k], p) {
+            (Some((n, a)), Some((m, b))) if n == m => Some((n, a.max(b))),
+            _ => None,
+        };
     }
     Ok(())
 }
+
+/// The region of a half-space collider for the broad phase, `{x : n·x ≤ offset}` in the
+/// world (`n` its outward normal, `offset = n·p + margin` for a point `p` of its boundary):
+/// `None` for every other collider, or where the region is the whole plane. A half-space's
+/// box is the whole plane, so without it every collider would be a candidate with every
+/// half-space (a floor pairs with each of 2,000 balls at every step).
+pub(crate) type Plane = crate::contact::broad::HalfPlane;
 
 fn grown_box(
     model: &Model,
     data: &Data,
     c: ColliderId,
     margin: &impl Fn(Real) -> Real,
-) -> Result<Aabb, KinematicsError> {
+) -> Result<(Aabb, Plane), KinematicsError> {
     let collider = &model.colliders()[c.index()];
     let pose = collider_pose(model, data, c)?;
     let aabb = collider.shape.compute_aabb(&pose);
@@ -120,11 +135,20 @@ fn grown_box(
     // The box of every possible position (parry's half-space box: half the largest
     // number, so that merging and loosening stay finite).
     let everywhere = Vec2::splat(0.5 * Real::MAX);
-    Ok(if m < 0.25 * Real::MAX {
+    let finite = m < 0.25 * Real::MAX;
+    let plane = match collider.shape.as_halfspace() {
+        Some(h) if finite => {
+            let n = pose.rotation * h.normal;
+            Some((n, n.dot(pose.translation) + m.max(0.0)))
+        }
+        _ => None,
+    };
+    let aabb = if finite {
         aabb.loosened(m.max(0.0))
     } else {
         Aabb::new(-everywhere, everywhere)
-    })
+    };
+    Ok((aabb, plane))
 }
 
 /// The pairs a sample lists (the `/state` contract), into `out`, in pair order: `all` when
@@ -135,7 +159,7 @@ pub(super) fn listed_pairs(
     data: &Data,
     all: Option<&[PairId]>,
     in_contact: impl Iterator<Item = PairId>,
-    (boxes, finder): (&mut Vec<Aabb>, &mut PairFinder),
+    (boxes, planes, finder): (&mut Vec<Aabb>, &mut Vec<Plane>, &mut PairFinder),
     out: &mut Vec<PairId>,
 ) -> Result<(), KinematicsError> {
     out.clear();
@@ -143,8 +167,8 @@ pub(super) fn listed_pairs(
         out.extend_from_slice(all);
         return Ok(());
     }
-    grown_boxes(model, data, boxes, |_| 0.0)?;
-    finder.overlapping_pairs(model, boxes, out);
+    grown_boxes(model, data, (boxes, planes), |_| 0.0)?;
+    finder.overlapping_pairs(model, (boxes, planes), out);
     out.extend(in_contact);
     out.sort_unstable();
     out.dedup();

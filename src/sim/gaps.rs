@@ -257,7 +257,9 @@ impl<'m> GapFunctions<'m> {
     pub fn reserve(&mut self, pairs: usize) {
         self.candidates
             .reserve(pairs.saturating_sub(self.candidates.len()));
+        let dim = self.model.nq() + self.model.nu() + super::system::WORKS;
         let memo = &mut self.memo;
+        memo.y.reserve(dim.saturating_sub(memo.y.len()));
         memo.candidates
             .reserve(pairs.saturating_sub(memo.candidates.len()));
         memo.g.reserve((SLOTS * pairs).saturating_sub(memo.g.len()));
@@ -521,6 +523,45 @@ impl EventFunctions for GapFunctions<'_> {
         Ok(())
     }
 
+    /// A gap alone (slot 0: a root search of an impact evaluates one pair's gap, not every
+    /// candidate's — the cost of a search in a scene of many bodies); a force, slip or
+    /// Painlevé function with all of them (they share the constrained dynamics). The same
+    /// numbers as [`EventFunctions::values`].
+    fn value(&mut self, t: Real, y: &[Real], i: usize, g: &mut [Real]) -> Result<Real, Nested> {
+        if !i.is_multiple_of(SLOTS) {
+            self.values(t, y, g)?;
+            return Ok(g[i]);
+        }
+        let n = self.model.nq();
+        update_positions(self.model, &mut self.data, t, &y[..n])
+            .map_err(|e| Nested::from(e.at(t)))?;
+        let pair = self.candidates[i / SLOTS];
+        let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
+            Ok(k) => self.disarmed[k].1,
+            Err(_) => 0.0,
+        };
+        Ok(self.open_gap_here(pair, t)? - floor)
+    }
+
+    /// The rate of one function (see [`EventFunctions::rates`]): a gap's alone.
+    fn rate(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        _dy: &[Real],
+        i: usize,
+        _g_dot: &mut [Real],
+    ) -> Result<Option<Real>, Nested> {
+        if !i.is_multiple_of(SLOTS) {
+            return Ok(Some(0.0));
+        }
+        let model = self.model;
+        let (n, nqu) = (model.nq(), model.nq() + model.nu());
+        update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
+        update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
+        self.gap_rate(self.candidates[i / SLOTS], t).map(Some)
+    }
+
     fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
         if !self.persistent.closed().is_empty() {
             self.stand_ins.counts.samples += 1;
@@ -549,33 +590,41 @@ impl EventFunctions for GapFunctions<'_> {
         update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
         g_dot.fill(0.0);
         for r in 0..self.candidates.len() {
-            let pair = self.candidates[r];
-            let closed = self.persistent.closed();
-            let mut on_pair = closed.iter().filter(|c| c.pair == pair);
-            let contact = match (on_pair.next().map(|c| c.local), on_pair.next()) {
-                (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
-                    .map_err(|e| Nested::from(e.at(t)))?,
-                (Some(local), None) => self.other_point(pair, local)?,
-                (Some(_), Some(_)) => None,
-            };
-            g_dot[SLOTS * r] = match contact {
-                Some(c) => {
-                    let p = model.pair_of(pair);
-                    let v = |collider: crate::model::ColliderId, at: Vec2| match model.colliders()
-                        [collider.index()]
-                    .body
-                    {
-                        Some(body) => point_velocity(model, &self.data, body, at)
-                            .map(|v| v.total)
-                            .map_err(|e| Nested::from(e.at(t))),
-                        None => Ok(Vec2::ZERO),
-                    };
-                    (v(p.b, c.point_b)? - v(p.a, c.point_a)?).dot(c.normal)
-                }
-                None => 0.0,
-            };
+            g_dot[SLOTS * r] = self.gap_rate(self.candidates[r], t)?;
         }
         Ok(true)
+    }
+}
+
+impl GapFunctions<'_> {
+    /// The rate of the gap of `pair` (slot 0): the normal relative velocity of its
+    /// points, at the positions and velocities of `self.data`.
+    fn gap_rate(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
+        let model = self.model;
+        let closed = self.persistent.closed();
+        let mut on_pair = closed.iter().filter(|c| c.pair == pair);
+        let contact = match (on_pair.next().map(|c| c.local), on_pair.next()) {
+            (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
+                .map_err(|e| Nested::from(e.at(t)))?,
+            (Some(local), None) => self.other_point(pair, local)?,
+            (Some(_), Some(_)) => None,
+        };
+        Ok(match contact {
+            Some(c) => {
+                let p = model.pair_of(pair);
+                let v = |collider: crate::model::ColliderId, at: Vec2| match model.colliders()
+                    [collider.index()]
+                .body
+                {
+                    Some(body) => point_velocity(model, &self.data, body, at)
+                        .map(|v| v.total)
+                        .map_err(|e| Nested::from(e.at(t))),
+                    None => Ok(Vec2::ZERO),
+                };
+                (v(p.b, c.point_b)? - v(p.a, c.point_a)?).dot(c.normal)
+            }
+            None => 0.0,
+        })
     }
 }
 

@@ -106,6 +106,8 @@ pub struct Simulation<'m> {
     accumulating: PairMap<Option<contacts::Accumulation>>,
     /// The bounding boxes of the colliders for the broad phase (see [`broad`]).
     boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
+    /// The regions of the half-spaces among them (see [`broad::Plane`]).
+    planes: Vec<broad::Plane>,
     /// Their hierarchy, kept between steps.
     finder: crate::contact::broad::PairFinder,
     /// Scratch pairs (see `rearm`).
@@ -131,6 +133,9 @@ pub struct Simulation<'m> {
     /// The points that started to slip at the instant of the last contact stage, and that
     /// instant (see `slip_starts_at`).
     slip_starts: (Real, Vec<(PairId, crate::math::Vec2, Real)>),
+    /// The points that lifted off at the instant of the last contact stage, and that
+    /// instant (see `lift_offs_at`).
+    lift_offs: (Real, Vec<(PairId, crate::math::Vec2)>),
     /// Scratch state `y`.
     y: Vec<Real>,
     /// Scratch gaps.
@@ -187,6 +192,7 @@ impl<'m> Simulation<'m> {
             last_separation: PairMap::new(None),
             accumulating: PairMap::new(None),
             boxes: Vec::new(),
+            planes: Vec::new(),
             finder: Default::default(),
             pair_scratch: Vec::new(),
             all_pairs,
@@ -199,6 +205,7 @@ impl<'m> Simulation<'m> {
             locator_samples: LocatorSettings::default().samples,
             indeterminate: (Real::NEG_INFINITY, 0),
             slip_starts: (Real::NEG_INFINITY, Vec::new()),
+            lift_offs: (Real::NEG_INFINITY, Vec::new()),
             y: vec![0.0; n],
             gap_values: Vec::new(),
             next_output: 0,
@@ -442,7 +449,8 @@ impl<'m> Simulation<'m> {
             .h_max_base()
             .min(1.01 * broad::GROWTH * self.stepper.h_next());
         let (g, slack) = (self.model.gravity().length(), 10.0 * self.scales.gap_tol);
-        broad::grown_boxes(self.model, &self.sampler, &mut self.boxes, |v| {
+        let regions = (&mut self.boxes, &mut self.planes);
+        broad::grown_boxes(self.model, &self.sampler, regions, |v| {
             v * h + 0.5 * g * h * h + slack
         })
         .map_err(|e| e.at(t))?;
@@ -478,7 +486,8 @@ impl<'m> Simulation<'m> {
             result = update_positions(self.model, &mut self.sampler, t, &y[..n])
                 .and_then(|()| update_velocities(self.model, &mut self.sampler, &y[n..nqu]))
                 .and_then(|()| {
-                    broad::sweep_boxes(self.model, &self.sampler, &mut self.boxes, |v| v * dt)
+                    let regions = (&mut self.boxes[..], &mut self.planes[..]);
+                    broad::sweep_boxes(self.model, &self.sampler, regions, |v| v * dt)
                 })
                 .map_err(|e| e.at(t));
             if result.is_err() {
@@ -501,7 +510,8 @@ impl<'m> Simulation<'m> {
                 self.gaps.candidates.extend_from_slice(all);
             }
             None => {
-                (self.finder).overlapping_pairs(self.model, &self.boxes, &mut self.gaps.candidates)
+                let regions = (&self.boxes[..], &self.planes[..]);
+                (self.finder).overlapping_pairs(self.model, regions, &mut self.gaps.candidates)
             }
         }
     }
@@ -513,10 +523,11 @@ impl<'m> Simulation<'m> {
         if let Some(all) = &self.every_pair {
             return Ok(all.clone());
         }
-        broad::grown_boxes(self.model, &self.sampler, &mut self.boxes, |_| margin)
-            .map_err(|e| e.at(t))?;
+        let regions = (&mut self.boxes, &mut self.planes);
+        broad::grown_boxes(self.model, &self.sampler, regions, |_| margin).map_err(|e| e.at(t))?;
         let mut near = Vec::new();
-        (self.finder).overlapping_pairs(self.model, &self.boxes, &mut near);
+        let regions = (&self.boxes[..], &self.planes[..]);
+        (self.finder).overlapping_pairs(self.model, regions, &mut near);
         Ok(near)
     }
 
@@ -751,7 +762,7 @@ impl<'m> Simulation<'m> {
             &self.sampler,
             self.all_pairs.as_deref(),
             self.modes.changed(),
-            (&mut self.boxes, &mut self.finder),
+            (&mut self.boxes, &mut self.planes, &mut self.finder),
             &mut self.listed,
         )
         .map_err(|e| e.at(t))

@@ -604,6 +604,9 @@ impl Persistent {
             })
             .collect();
         Ok(Selection {
+            a: self.ev.a.clone(),
+            b: self.b.clone(),
+            allowed,
             points: self.ev.points.clone(),
             free: (0..candidates.len()).map(|i| self.b[2 * i]).collect(),
             solutions,
@@ -628,6 +631,12 @@ pub struct Candidate {
 /// The outcome of a mode selection.
 #[derive(Clone, Debug)]
 pub struct Selection {
+    /// The problem `w = A x + b` of the candidates (2k × 2k, 2k), and their allowed modes.
+    pub a: DMatrix<Real>,
+    /// See `a`.
+    pub b: DVector<Real>,
+    /// See `a`.
+    pub allowed: Vec<Allowed>,
     /// The candidate points, in order.
     pub points: Vec<Point>,
     /// The normal acceleration of each candidate with no contact force, `b_n` (m/s²).

@@ -636,3 +636,25 @@ fn a_chain_of_32_links_lands_and_lies_on_the_floor_in_few_steps() {
     println!("lowest hinge: y = {} m at t = {} s", lowest.1, lowest.0);
     assert!(lowest.1 >= -0.99 - 1e-9, "{lowest:?}");
 }
+
+/// The 32-link chain on the floor past t = 5.8354 s, where a lift-off came back 1,000 times
+/// at one instant and stopped the run (found by running the scene ten times longer than
+/// its 5 s): Lemke's one solution of the mode selection (43 points) kept the end of link 11
+/// closed and sliding with a normal force of 1.2e-9 N — complementarity holds there with
+/// `x_n = w_n = 0`, open or closed — so its lift-off event (`λ_n` ≤ 0, falling) came back at
+/// once. A point that lifts off at an instant is now opened when the same forces without
+/// its own meet every condition (`contacts::open_lifting_points`).
+#[test]
+fn the_32_link_chain_lifts_off_past_the_old_stall() {
+    let path = format!("{}/scenes/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
+    let mut scene = ricochet::scene::load(&path).unwrap();
+    scene.settings.t_end = 6.0;
+    let (rec, summary, _) = run(&scene, MaterialOverride::default());
+    println!("{}; {} impacts", summary.stop, rec.impacts.len());
+    assert!(
+        matches!(summary.stop, StopReason::EndTime),
+        "{}",
+        summary.stop
+    );
+    assert_simultaneous_impacts_obey_newton(&rec);
+}

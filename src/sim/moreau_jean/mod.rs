@@ -223,6 +223,8 @@ pub struct MoreauJean<'m> {
     listed_modes: Vec<PairMode>,
     listed_slips: Vec<i8>,
     boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
+    /// The regions of the half-spaces among them.
+    planes: Vec<super::broad::Plane>,
     /// Their hierarchy, kept between samples.
     finder: crate::contact::broad::PairFinder,
     /// The mode of each pair in the current step.
@@ -312,6 +314,7 @@ impl<'m> MoreauJean<'m> {
             listed_modes: Vec::new(),
             listed_slips: Vec::new(),
             boxes: Vec::new(),
+            planes: Vec::new(),
             finder: Default::default(),
             modes: PairMap::new(PairMode::Free),
             k: 0,
@@ -799,7 +802,7 @@ impl<'m> MoreauJean<'m> {
             &self.sampler,
             self.all_pairs.as_deref(),
             self.modes.changed(),
-            (&mut self.boxes, &mut self.finder),
+            (&mut self.boxes, &mut self.planes, &mut self.finder),
             &mut self.listed,
         )
         .map_err(|e| SimError::at(t, e))?;
