@@ -34,7 +34,7 @@ pub struct Candidate {
 ///
 /// The boundaries are closed on the side of forward sliding (`v_t^S = 0`) and of
 /// sticking (against reverse sliding), where the candidates coincide.
-#[inline]
+#[inline(always)]
 pub fn candidates(pb: &ImpactProblem, c: &Coefficients) -> [Candidate; 3] {
     let (e, mu, w) = (pb.e, pb.mu, &pb.w);
     let big_v = -pb.v_a.n;
@@ -84,7 +84,7 @@ pub fn candidates(pb: &ImpactProblem, c: &Coefficients) -> [Candidate; 3] {
 /// of the three single-phase candidates. Its phase is the straight segment from the
 /// origin of the impulse plane to `(I_n, I_t)`, along which the works are
 /// `½ I_n (v_n^A + v_n^S)` and `½ I_t (v_t^A + v_t^S)`, the two terms of Eq. (29).
-#[inline]
+#[inline(always)]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let Some(chosen) = candidates(pb, c).into_iter().find(|k| k.coherent) else {
         return LawSolution::failed(if c.det == 0.0 {

@@ -51,6 +51,7 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::math::Real;
+use scale::Scale;
 
 /// The hypothesis that ends the collision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -165,18 +166,31 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 /// that range is [`ImpactError::OutOfRange`].
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     let (scale, unit) = problem.at_order_one()?;
-    match solve_at_order_one(law, &unit) {
-        Ok(mut out) => {
-            if scale.up_in_place(&mut out) {
-                Ok(out)
-            } else {
-                // Extreme scales, or an answer beyond the range: the general path, on the
-                // answer at order one computed again.
-                scale.up(solve_at_order_one(law, &unit)?)
-            }
-        }
+    // The usual case in one pass: every power of two a normal double, the law's answer
+    // coherent and within the range of doubles.
+    if let Some(sol) = solve_coherent(law, &unit)
+        && let Some(f) = scale.exponents().factors()
+        && f.keep_in_range(&sol)
+    {
+        return Ok(f.outcome(law, &sol));
+    }
+    solve_in_general(law, problem, scale, &unit)
+}
+
+/// [`solve`] for the cases its one pass declines: extreme scales, answers beyond the range
+/// of doubles, and the errors of the law.
+#[cold]
+#[inline(never)]
+fn solve_in_general(
+    law: Law,
+    problem: &ImpactProblem,
+    scale: Scale,
+    unit: &ImpactProblem,
+) -> Result<Outcome, ImpactError> {
+    match solve_at_order_one(law, unit) {
+        Ok(out) => scale.up(out),
         // Not a bug of the law when the data do not fit in doubles at order one.
-        Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, &unit) {
+        Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, unit) {
             Some(why) => Err(ImpactError::IllConditioned { law, why, detail }),
             None => Err(ImpactError::Incoherent { law, detail }),
         },
@@ -184,10 +198,10 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
     }
 }
 
-/// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
-/// `[1, 2)`.
-#[inline]
-fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
+/// The problem in the paper's frame, `t` oriented so that `v_t^A ≥ 0` [P, Eq. (10)]: for
+/// `v_t^A < 0`, `m_nt → −m_nt` and `v_t^A → −v_t^A`; and whether it was mirrored.
+#[inline(always)]
+fn paper_frame(problem: &ImpactProblem) -> (ImpactProblem, bool) {
     let mirrored = problem.v_a.t < 0.0;
     let pb = if mirrored {
         ImpactProblem {
@@ -198,14 +212,69 @@ fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, Impa
     } else {
         *problem
     };
+    (pb, mirrored)
+}
+
+/// The law's solution of a problem in the paper's frame.
+#[inline(always)]
+fn apply(law: Law, pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
+    match law {
+        Law::Newton => newton::solve(pb, c, case),
+        Law::KaneLevinson => kane_levinson::solve(pb, c),
+        Law::Poisson => poisson::solve(pb, c),
+        Law::Stronge => stronge::solve(pb, c),
+    }
+}
+
+/// A law's coherent solution at order one, brought back to the caller's frame.
+#[derive(Clone, Copy, Debug)]
+struct Coherent {
+    /// The sign case of Table 1.
+    case: SignCase,
+    /// g, h, p, q, Δ (paper's frame).
+    c: Coefficients,
+    /// The law's solution, in the caller's frame.
+    sol: LawSolution,
+    /// `ΔE` [P, Eq. (29)].
+    delta_e: Real,
+    /// Whether `t` was mirrored.
+    mirrored: bool,
+}
+
+/// [`solve_at_order_one`] for the solutions that pass the coherence checks; `None` where
+/// it fails.
+#[inline(always)]
+fn solve_coherent(law: Law, unit: &ImpactProblem) -> Option<Coherent> {
+    let (pb, mirrored) = paper_frame(unit);
     let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
     let case = c.sign_case();
-    let mut sol = match law {
-        Law::Newton => newton::solve(&pb, &c, case),
-        Law::KaneLevinson => kane_levinson::solve(&pb, &c),
-        Law::Poisson => poisson::solve(&pb, &c),
-        Law::Stronge => stronge::solve(&pb, &c),
-    };
+    let mut sol = apply(law, &pb, &c, case);
+    if sol.failure.is_some() || !is_coherent(&pb, &sol) {
+        return None;
+    }
+    if mirrored {
+        sol.impulse.t = -sol.impulse.t;
+        sol.v_s.t = -sol.v_s.t;
+        sol.phases.mirror();
+    }
+    let delta_e = energy_change(sol.impulse, unit.v_a, sol.v_s);
+    Some(Coherent {
+        case,
+        c,
+        sol,
+        delta_e,
+        mirrored,
+    })
+}
+
+/// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
+/// `[1, 2)`.
+#[inline(never)]
+fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
+    let (pb, mirrored) = paper_frame(problem);
+    let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
+    let case = c.sign_case();
+    let mut sol = apply(law, &pb, &c, case);
     match sol.failure {
         None => {}
         Some(Failure::Jam) => return Err(ImpactError::Jam { law: law.name() }),
@@ -240,34 +309,46 @@ const COHERENCE_TOL: Real = 1e-7;
 /// Checks a solution (paper's frame) against the coherence conditions of [P, Sect. 4.2]
 /// and the momentum relations (22)–(23): `I_n > 0`, `v_n^S ≥ 0`, `|I_t| ≤ μ I_n`, the sign
 /// of `v_t^S` matching the type, `v^S − v^A = W I`.
-#[inline]
 fn check_coherence(law: Law, pb: &ImpactProblem, sol: &LawSolution) -> Result<(), ImpactError> {
-    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
-    let wi = w.apply(i);
+    if is_coherent(pb, sol) {
+        Ok(())
+    } else {
+        Err(incoherence(law, pb, sol, coherence_tolerance(pb, sol)))
+    }
+}
+
+/// The absolute tolerance of the coherence checks: [`COHERENCE_TOL`] times the sum of the
+/// magnitudes of the terms of Eqs. (22)–(23).
+#[inline(always)]
+fn coherence_tolerance(pb: &ImpactProblem, sol: &LawSolution) -> Real {
+    let (i, v_a, w) = (sol.impulse, pb.v_a, &pb.w);
     let scale = v_a.n.abs()
         + v_a.t.abs()
         + (w.nn * i.n).abs()
         + (w.nt * i.t).abs()
         + (w.nt * i.n).abs()
         + (w.tt * i.t).abs();
-    let tol = COHERENCE_TOL * scale;
+    COHERENCE_TOL * scale
+}
+
+/// Whether a solution passes the checks of [`check_coherence`].
+#[inline(always)]
+fn is_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
+    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
+    let wi = w.apply(i);
+    let tol = coherence_tolerance(pb, sol);
     let sign_ok = match sol.kind {
         CollisionType::Sticking => v_s.t.abs() <= tol,
         CollisionType::ForwardSliding => v_s.t >= -tol,
         CollisionType::ReverseSliding => v_s.t <= tol,
     };
-    let ok = i.n > 0.0
+    i.n > 0.0
         && i.n.is_finite()
         && v_s.n >= -tol
         && (v_s.n - v_a.n - wi.n).abs() <= tol
         && (v_s.t - v_a.t - wi.t).abs() <= tol
         && i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL)
-        && sign_ok;
-    if ok {
-        Ok(())
-    } else {
-        Err(incoherence(law, pb, sol, tol))
-    }
+        && sign_ok
 }
 
 /// The error naming the first coherence condition that failed (the slow path).

@@ -29,7 +29,8 @@
 
 use super::coefficients::Coefficients;
 use super::outcome::Outcome;
-use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem};
+use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem, Impulse};
+use super::{Coherent, Law};
 use crate::math::Real;
 
 /// The powers of two `s = 2^w` and `c = 2^v` of a problem's `W` and `v^A`.
@@ -43,17 +44,18 @@ pub(super) struct Scale {
 
 impl Scale {
     /// The scales of `W` and `v^A`: the powers of two at or below their largest entries
-    /// (both nonzero for valid data: `m_nn > 0`, `v_n^A < 0`).
-    #[inline]
-    pub(super) fn of(w: &ImpactMatrix, v_a: ContactVelocity) -> Self {
+    /// (both nonzero for valid data: `m_nn > 0`, `v_n^A < 0`), given as the bit patterns
+    /// of the largest magnitudes `max |m_ij|` and `max |v_i^A|` (finite).
+    #[inline(always)]
+    pub(super) fn of_magnitudes(w_max: u64, v_max: u64) -> Self {
         Self {
-            w: exponent(w.nn.abs().max(w.nt.abs()).max(w.tt.abs())),
-            v: exponent(v_a.n.abs().max(v_a.t.abs())),
+            w: exponent_of_magnitude(w_max),
+            v: exponent_of_magnitude(v_max),
         }
     }
 
     /// `W / s`, whose largest entry lies in `[1, 2)`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn matrix_down(&self, w: &ImpactMatrix) -> ImpactMatrix {
         ImpactMatrix::new(
             ldexp(w.nn, -self.w),
@@ -64,7 +66,7 @@ impl Scale {
 
     /// The problem `(W/s, v^A/c, e, μ)`, with `w = W/s` already computed
     /// ([`Scale::matrix_down`]).
-    #[inline]
+    #[inline(always)]
     pub(super) fn down(&self, pb: &ImpactProblem, w: ImpactMatrix) -> ImpactProblem {
         ImpactProblem {
             w,
@@ -114,7 +116,7 @@ impl Scale {
 
     /// The powers of two of an impulse, a velocity, a work, a coefficient g, h, p, q and
     /// `Δ`, in this order (see the module's table).
-    #[inline]
+    #[inline(always)]
     pub(super) fn exponents(&self) -> Exponents {
         Exponents {
             impulse: self.v - self.w,
@@ -126,50 +128,8 @@ impl Scale {
     }
 
     /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
-    /// caller's scales in place, when every power of two of
-    /// [`exponents`](Scale::exponents) is that of a normal double and every number the
-    /// answer reports stays in the range of doubles: each kind of quantity is multiplied by
-    /// its power of two, which is exact and equal, bit for bit, to [`Scale::up`]'s
-    /// [`ldexp`]. Returns false otherwise, and `out` then means nothing: [`Scale::up`] on
-    /// the outcome at order one gives the answer or the error.
-    #[inline]
-    pub(super) fn up_in_place(&self, out: &mut Outcome) -> bool {
-        let Some(f) = self.exponents().factors() else {
-            return false;
-        };
-        let i_n = out.impulse.n;
-        out.impulse.n = f.impulse(out.impulse.n);
-        out.impulse.t = f.impulse(out.impulse.t);
-        out.v_s = ContactVelocity::new(f.velocity(out.v_s.n), f.velocity(out.v_s.t));
-        out.delta_e = f.work(out.delta_e);
-        out.work_n = f.work(out.work_n);
-        out.work_t = f.work(out.work_t);
-        out.coefficients = out.coefficients.scaled(&f);
-        out.phases = out.phases.scaled(&f);
-        // The numbers `beyond_range` checks.
-        let c = &out.coefficients;
-        let mut finite = out.impulse.n.is_finite()
-            & out.impulse.t.is_finite()
-            & out.delta_e.is_finite()
-            & out.work_n.is_finite()
-            & out.work_t.is_finite()
-            & c.g.is_finite()
-            & c.h.is_finite()
-            & c.p.is_finite()
-            & c.q.is_finite();
-        for ph in out.phases.iter() {
-            let end = ph.end;
-            finite &= end.i.n.is_finite()
-                & end.i.t.is_finite()
-                & end.work_n.is_finite()
-                & end.work_t.is_finite();
-        }
-        finite && !(i_n > 0.0 && out.impulse.n == 0.0)
-    }
-
-    /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
     /// caller's scales; an error if a number of it is beyond the range of doubles. (The
-    /// general path, for the answers [`Scale::up_in_place`] does not take.)
+    /// general path; [`Factors::outcome`] is the usual one.)
     #[inline(never)]
     pub(super) fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
         let k = self.exponents();
@@ -208,23 +168,23 @@ pub(super) trait Rescale {
 }
 
 impl Rescale for Exponents {
-    #[inline]
+    #[inline(always)]
     fn impulse(&self, x: Real) -> Real {
         ldexp(x, self.impulse)
     }
-    #[inline]
+    #[inline(always)]
     fn velocity(&self, x: Real) -> Real {
         ldexp(x, self.velocity)
     }
-    #[inline]
+    #[inline(always)]
     fn work(&self, x: Real) -> Real {
         ldexp(x, self.work)
     }
-    #[inline]
+    #[inline(always)]
     fn coefficient(&self, x: Real) -> Real {
         ldexp(x, self.coefficient)
     }
-    #[inline]
+    #[inline(always)]
     fn det(&self, x: Real) -> Real {
         ldexp(x, self.det)
     }
@@ -239,28 +199,90 @@ pub(super) struct Factors {
     work: Real,
     coefficient: Real,
     det: Real,
+    /// `2^(1024 − k)` for the impulses' `k` (infinite for `k ≤ 0`): the magnitudes at
+    /// order one below which the impulses stay finite.
+    impulse_limit: Real,
+    /// The same for the works.
+    work_limit: Real,
+    /// The same for g, h, p, q.
+    coefficient_limit: Real,
 }
 
 impl Rescale for Factors {
-    #[inline]
+    #[inline(always)]
     fn impulse(&self, x: Real) -> Real {
         x * self.impulse
     }
-    #[inline]
+    #[inline(always)]
     fn velocity(&self, x: Real) -> Real {
         x * self.velocity
     }
-    #[inline]
+    #[inline(always)]
     fn work(&self, x: Real) -> Real {
         x * self.work
     }
-    #[inline]
+    #[inline(always)]
     fn coefficient(&self, x: Real) -> Real {
         x * self.coefficient
     }
-    #[inline]
+    #[inline(always)]
     fn det(&self, x: Real) -> Real {
         x * self.det
+    }
+}
+
+impl Factors {
+    /// Whether the numbers of a coherent solution at order one that [`Scale::up`] checks
+    /// stay in the range of doubles at the caller's scales, with `I_n > 0` above 0: a
+    /// product `x · 2^k` is finite exactly when `|x| < 2^(1024 − k)`.
+    #[inline(always)]
+    pub(super) fn keep_in_range(&self, s: &Coherent) -> bool {
+        // The last phase ends at the impulse with the works, so the end of the first phase
+        // stands for the phases.
+        let (i, first, c) = (s.sol.impulse, s.sol.phases.first_end(), &s.c);
+        debug_assert!(
+            s.sol.phases.end().i == i,
+            "the last phase ends at the impulse"
+        );
+        let (impulse, work, coefficient) =
+            (self.impulse_limit, self.work_limit, self.coefficient_limit);
+        let within = |x: Real, limit: Real| x.abs() < limit;
+        let impulses = within(i.n, impulse)
+            & within(i.t, impulse)
+            & within(first.i.n, impulse)
+            & within(first.i.t, impulse);
+        let works = within(s.delta_e, work)
+            & within(first.work_n, work)
+            & within(first.work_t, work)
+            & within(s.sol.phases.end().work_n, work)
+            & within(s.sol.phases.end().work_t, work);
+        let coefficients = within(c.g, coefficient)
+            & within(c.h, coefficient)
+            & within(c.p, coefficient)
+            & within(c.q, coefficient);
+        let lost = i.n > 0.0 && self.impulse(i.n) == 0.0;
+        impulses & works & coefficients & !lost
+    }
+
+    /// The outcome at the caller's scales of a coherent solution at order one: each kind
+    /// of quantity multiplied by its power of two, which is exact and equal, bit for bit,
+    /// to [`Scale::up`]'s [`ldexp`] where [`keep_in_range`](Self::keep_in_range) holds.
+    #[inline(always)]
+    pub(super) fn outcome(&self, law: Law, s: &Coherent) -> Outcome {
+        let (sol, end) = (&s.sol, s.sol.phases.end());
+        Outcome {
+            law,
+            kind: sol.kind,
+            case: s.case,
+            coefficients: s.c.scaled(self),
+            impulse: Impulse::new(self.impulse(sol.impulse.n), self.impulse(sol.impulse.t)),
+            v_s: ContactVelocity::new(self.velocity(sol.v_s.n), self.velocity(sol.v_s.t)),
+            phases: sol.phases.scaled(self),
+            delta_e: self.work(s.delta_e),
+            work_n: self.work(end.work_n),
+            work_t: self.work(end.work_t),
+            mirrored: s.mirrored,
+        }
     }
 }
 
@@ -282,8 +304,8 @@ pub(super) struct Exponents {
 impl Exponents {
     /// The factors `2^k`, if every `k` is the exponent of a normal double
     /// (`−1022 ≤ k ≤ 1023`).
-    #[inline]
-    fn factors(&self) -> Option<Factors> {
+    #[inline(always)]
+    pub(super) fn factors(&self) -> Option<Factors> {
         let normal = |k: i32| (-1022..=1023).contains(&k);
         (normal(self.impulse)
             & normal(self.velocity)
@@ -296,7 +318,21 @@ impl Exponents {
             work: pow2(self.work),
             coefficient: pow2(self.coefficient),
             det: pow2(self.det),
+            impulse_limit: finite_below(self.impulse),
+            work_limit: finite_below(self.work),
+            coefficient_limit: finite_below(self.coefficient),
         })
+    }
+}
+
+/// `2^(1024 − k)` for `k ∈ [1, 1023]`, infinite for `k ≤ 0`: the magnitudes `|x|` of the
+/// doubles whose product by `2^k` is finite are those below it.
+#[inline(always)]
+fn finite_below(k: i32) -> Real {
+    if k >= 1 {
+        pow2(1024 - k)
+    } else {
+        Real::INFINITY
     }
 }
 
@@ -338,7 +374,7 @@ fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32
 
 /// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
 /// for 0 and non-finite `x`.
-#[inline]
+#[inline(always)]
 pub(crate) fn exponent(x: Real) -> i32 {
     if x == 0.0 || !x.is_finite() {
         return 0;
@@ -352,9 +388,28 @@ pub(crate) fn exponent(x: Real) -> i32 {
     }
 }
 
+/// [`exponent`] of the finite number `|x| ≥ 0` given by its bits: the biased exponent field
+/// of a normal number, less its bias.
+#[inline(always)]
+fn exponent_of_magnitude(bits: u64) -> i32 {
+    let biased = (bits >> 52) as i32;
+    if biased == 0 {
+        exponent_of_subnormal(Real::from_bits(bits))
+    } else {
+        biased - 1023
+    }
+}
+
+/// [`exponent`] of 0 or a subnormal number (the slow path).
+#[cold]
+#[inline(never)]
+fn exponent_of_subnormal(x: Real) -> i32 {
+    exponent(x)
+}
+
 /// `x · 2^k`, exact unless the result is subnormal (then rounded, at most twice) or beyond
 /// the range of doubles (then infinite).
-#[inline]
+#[inline(always)]
 pub(crate) fn ldexp(x: Real, k: i32) -> Real {
     if (-1022..=1023).contains(&k) {
         x * pow2(k)
@@ -378,7 +433,7 @@ fn ldexp_far(mut x: Real, mut k: i32) -> Real {
 }
 
 /// `2^k` for `k ∈ [−1022, 1023]`, from its bits.
-#[inline]
+#[inline(always)]
 fn pow2(k: i32) -> Real {
     debug_assert!((-1022..=1023).contains(&k));
     Real::from_bits(((k + 1023) as u64) << 52)
@@ -387,21 +442,27 @@ fn pow2(k: i32) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::impact::{Law, solve_at_order_one};
+    use crate::impact::{Law, solve_at_order_one, solve_coherent};
 
-    /// The in-place path of [`Scale::up_in_place`] (a product by each power of two) gives
-    /// the general path's answer ([`ldexp`] after [`beyond_range`]) bit for bit, and
+    /// The one pass of [`solve`](crate::impact::solve) ([`solve_coherent`], then a product
+    /// by each power of two, [`Factors::outcome`]) gives the general path's answer
+    /// ([`solve_at_order_one`], then [`ldexp`] after [`beyond_range`]) bit for bit, and
     /// declines only where the general path fails or a power of two is beyond the
     /// exponents of the normal doubles. Random problems over the whole range of scales
     /// (`W = L Lᵀ`, singular one time in seven), every law.
     #[test]
-    fn in_place_scaling_is_the_general_path() {
+    fn one_pass_is_the_general_path() {
         let mut state: u64 = 0x2545_F491_4F6C_DD1D;
         let mut rnd = move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 11) as Real / (1u64 << 53) as Real
+        };
+        let one_pass = |law: Law, scale: Scale, unit: &ImpactProblem| {
+            let f = scale.exponents().factors()?;
+            let sol = solve_coherent(law, unit)?;
+            f.keep_in_range(&sol).then(|| f.outcome(law, &sol))
         };
         let (mut in_place, mut declined, mut errors) = (0, 0, 0);
         for k in 0..20_000 {
@@ -426,11 +487,11 @@ mod tests {
             };
             for law in Law::ALL {
                 let Ok(out) = solve_at_order_one(law, &unit) else {
+                    assert_eq!(one_pass(law, scale, &unit), None);
                     continue;
                 };
                 let general = scale.up(out);
-                let mut fast = out;
-                if scale.up_in_place(&mut fast) {
+                if let Some(fast) = one_pass(law, scale, &unit) {
                     in_place += 1;
                     // Debug prints every double exactly (and −0 apart from 0).
                     assert_eq!(
@@ -448,7 +509,7 @@ mod tests {
         assert!(in_place > 40_000, "{in_place}");
         assert!(errors > 100 && declined > errors, "{declined} {errors}");
 
-        // I_n > 0 that the in-place path brings to 0 while its powers of two are normal:
+        // I_n > 0 that the one pass brings to 0 while its powers of two are normal:
         // W ≈ 2^511, v_t^A = 2^-255, v_n^A = −2^-575 (I_n ≈ 2^-320 · 2^-766 at order one).
         let w = ImpactMatrix::new(pow2(511), pow2(508), pow2(511));
         let pb = ImpactProblem::new(w, ContactVelocity::new(-pow2(-575), pow2(-255)), 0.5, 0.3);
@@ -457,8 +518,7 @@ mod tests {
         for law in Law::ALL {
             let out = solve_at_order_one(law, &unit).unwrap();
             assert!(out.impulse.n > 0.0);
-            let mut fast = out;
-            assert!(!scale.up_in_place(&mut fast), "{law}");
+            assert_eq!(one_pass(law, scale, &unit), None, "{law}");
             assert!(
                 matches!(
                     scale.up(out),
