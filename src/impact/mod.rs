@@ -51,7 +51,6 @@ use std::str::FromStr;
 use serde::{Deserialize, Serialize};
 
 use crate::math::Real;
-use scale::Scale;
 
 /// The hypothesis that ends the collision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -165,32 +164,51 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 /// `scale.rs`), so that it holds over the whole range of finite doubles. An answer beyond
 /// that range is [`ImpactError::OutOfRange`].
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
-    let (scale, unit) = problem.at_order_one()?;
-    // The usual case in one pass: every power of two a normal double, the law's answer
-    // coherent and within the range of doubles.
-    if let Some(sol) = solve_coherent(law, &unit)
-        && let Some(f) = scale.exponents().factors()
-        && f.keep_in_range(&sol)
-    {
-        return Ok(f.outcome(law, &sol));
+    // One function per law: each is a straight line for the registers.
+    match law {
+        Law::Newton => solve_by(Law::Newton, problem, newton::solve),
+        Law::KaneLevinson => solve_by(Law::KaneLevinson, problem, |pb, c, _| {
+            kane_levinson::solve(pb, c)
+        }),
+        Law::Poisson => solve_by(Law::Poisson, problem, |pb, c, _| poisson::solve(pb, c)),
+        Law::Stronge => solve_by(Law::Stronge, problem, |pb, c, _| stronge::solve(pb, c)),
     }
-    solve_in_general(law, problem, scale, &unit)
 }
 
-/// [`solve`] for the cases its one pass declines: extreme scales, answers beyond the range
-/// of doubles, and the errors of the law.
-#[cold]
+/// [`solve`] with the law's solution in the paper's frame given by `apply`.
 #[inline(never)]
-fn solve_in_general(
+fn solve_by(
     law: Law,
     problem: &ImpactProblem,
-    scale: Scale,
-    unit: &ImpactProblem,
+    apply: impl Fn(&ImpactProblem, &Coefficients, SignCase) -> LawSolution,
 ) -> Result<Outcome, ImpactError> {
-    match solve_at_order_one(law, unit) {
+    // The usual case in one pass: valid data of moderate scales, the law's answer
+    // clearly coherent and within the range of doubles at the caller's scales.
+    if let Some((f, unit)) = problem.at_moderate_scale() {
+        let (pb, mirrored) = paper_frame(&unit);
+        let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
+        let case = c.sign_case();
+        let sol = apply(&pb, &c, case);
+        if sol.failure.is_none() && is_clearly_coherent(&pb, &sol) {
+            let sol = Coherent::new(&unit, case, c, sol, mirrored);
+            if f.keep_in_range(&sol) {
+                return Ok(f.outcome(law, &sol));
+            }
+        }
+    }
+    solve_in_general(law, problem)
+}
+
+/// [`solve`] for the cases its one pass declines: invalid data, extreme scales, answers
+/// beyond the range of doubles, and the errors of the law.
+#[cold]
+#[inline(never)]
+fn solve_in_general(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
+    let (scale, unit) = problem.at_order_one()?;
+    match solve_at_order_one(law, &unit) {
         Ok(out) => scale.up(out),
         // Not a bug of the law when the data do not fit in doubles at order one.
-        Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, unit) {
+        Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, &unit) {
             Some(why) => Err(ImpactError::IllConditioned { law, why, detail }),
             None => Err(ImpactError::Incoherent { law, detail }),
         },
@@ -241,30 +259,31 @@ struct Coherent {
     mirrored: bool,
 }
 
-/// [`solve_at_order_one`] for the solutions that pass the coherence checks; `None` where
-/// it fails.
-#[inline(always)]
-fn solve_coherent(law: Law, unit: &ImpactProblem) -> Option<Coherent> {
-    let (pb, mirrored) = paper_frame(unit);
-    let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
-    let case = c.sign_case();
-    let mut sol = apply(law, &pb, &c, case);
-    if sol.failure.is_some() || !is_coherent(&pb, &sol) {
-        return None;
+impl Coherent {
+    /// A law's solution of `unit` (valid, at order one) that passes the coherence checks,
+    /// brought back to the caller's frame, with its `ΔE`.
+    #[inline(always)]
+    fn new(
+        unit: &ImpactProblem,
+        case: SignCase,
+        c: Coefficients,
+        mut sol: LawSolution,
+        mirrored: bool,
+    ) -> Self {
+        if mirrored {
+            sol.impulse.t = -sol.impulse.t;
+            sol.v_s.t = -sol.v_s.t;
+            sol.phases.mirror();
+        }
+        let delta_e = energy_change(sol.impulse, unit.v_a, sol.v_s);
+        Self {
+            case,
+            c,
+            sol,
+            delta_e,
+            mirrored,
+        }
     }
-    if mirrored {
-        sol.impulse.t = -sol.impulse.t;
-        sol.v_s.t = -sol.v_s.t;
-        sol.phases.mirror();
-    }
-    let delta_e = energy_change(sol.impulse, unit.v_a, sol.v_s);
-    Some(Coherent {
-        case,
-        c,
-        sol,
-        delta_e,
-        mirrored,
-    })
 }
 
 /// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
@@ -334,21 +353,42 @@ fn coherence_tolerance(pb: &ImpactProblem, sol: &LawSolution) -> Real {
 /// Whether a solution passes the checks of [`check_coherence`].
 #[inline(always)]
 fn is_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
+    is_coherent_within(pb, sol, coherence_tolerance(pb, sol))
+}
+
+/// Whether a solution passes the checks of [`check_coherence`] with the least tolerance,
+/// [`COHERENCE_TOL`] `(|v_n^A| + |v_t^A|)`, which is known before the solution: then it
+/// passes them (and [`is_coherent`] is true) without the long chain of sums of the full
+/// tolerance after the solution; when it does not, [`is_coherent`] decides.
+///
+/// The full tolerance is a sum of non-negative terms that starts with
+/// `|v_n^A| + |v_t^A|`, rounded at each step, times a positive constant: rounding is
+/// monotone, so it is never below the least one, unless it is NaN; and it is NaN only
+/// where a product of `W` and `I` is not finite, which makes a residual of Eqs. (22)–(23)
+/// infinite or NaN, so that the checks fail with any tolerance. Every check that holds for
+/// a tolerance holds for a larger one.
+#[inline(always)]
+fn is_clearly_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
+    is_coherent_within(pb, sol, COHERENCE_TOL * (pb.v_a.n.abs() + pb.v_a.t.abs()))
+}
+
+/// The checks of [`check_coherence`] with the absolute tolerance `tol`.
+#[inline(always)]
+fn is_coherent_within(pb: &ImpactProblem, sol: &LawSolution, tol: Real) -> bool {
     let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
     let wi = w.apply(i);
-    let tol = coherence_tolerance(pb, sol);
     let sign_ok = match sol.kind {
         CollisionType::Sticking => v_s.t.abs() <= tol,
         CollisionType::ForwardSliding => v_s.t >= -tol,
         CollisionType::ReverseSliding => v_s.t <= tol,
     };
-    i.n > 0.0
-        && i.n.is_finite()
-        && v_s.n >= -tol
-        && (v_s.n - v_a.n - wi.n).abs() <= tol
-        && (v_s.t - v_a.t - wi.t).abs() <= tol
-        && i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL)
-        && sign_ok
+    (i.n > 0.0)
+        & i.n.is_finite()
+        & (v_s.n >= -tol)
+        & ((v_s.n - v_a.n - wi.n).abs() <= tol)
+        & ((v_s.t - v_a.t - wi.t).abs() <= tol)
+        & (i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL))
+        & sign_ok
 }
 
 /// The error naming the first coherence condition that failed (the slow path).

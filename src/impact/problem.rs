@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::scale::Scale;
+use super::scale::{Factors, Scale};
 use crate::math::Real;
 
 /// The 2×2 matrix `W = [[m_nn, m_nt], [m_nt, m_tt]]` of [P, Eq. (20)], mapping the
@@ -276,6 +276,30 @@ impl ImpactProblem {
             return Err(ImpactError::NegativeFriction { mu: self.mu });
         }
         Ok((scale, scale.down(self, unit)))
+    }
+
+    /// [`at_order_one`](Self::at_order_one) for the usual problems: valid, with the
+    /// largest entries of `W` and `v^A` between `2^-340` and `2^341`. Then every power of
+    /// two by which an answer scales (`c/s`, `c`, `c²/s`, `s`, `s²`) is a normal double,
+    /// and the powers of two come as [`Factors`]. `None` for the others (invalid data
+    /// included): [`at_order_one`](Self::at_order_one) tells which.
+    #[inline(always)]
+    pub(super) fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
+        // The exponents of the largest magnitudes, from their bits (0 and subnormals,
+        // infinities and NaN fall outside ±340).
+        let (w, v) = (&self.w, self.v_a);
+        let w_max = magnitude(w.nn).max(magnitude(w.nt)).max(magnitude(w.tt));
+        let v_max = magnitude(v.n).max(magnitude(v.t));
+        let scale = Scale::of_moderate_magnitudes(w_max, v_max)?;
+        let unit = scale.matrix_down(&self.w);
+        let valid = (unit.nn > 0.0)
+            & (unit.tt >= 0.0)
+            & (unit.det() >= -SINGULAR_RELATIVE_DET * unit.nn * unit.tt)
+            & (self.v_a.n < 0.0)
+            & (0.0..=1.0).contains(&self.e)
+            & (self.mu >= 0.0)
+            & (self.mu < Real::INFINITY);
+        valid.then(|| (scale.factors(), scale.down(self, unit)))
     }
 
     /// The error of a `W` that is not positive semidefinite (the slow path of `validate`).
