@@ -189,11 +189,12 @@ fn solve_by(
         let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
         let case = c.sign_case();
         let sol = apply(&pb, &c, case);
-        if sol.failure.is_none() && is_clearly_coherent(&pb, &sol) {
-            let sol = Coherent::new(&unit, case, c, sol, mirrored);
-            if f.keep_in_range(&sol) {
-                return Ok(f.outcome(law, &sol));
-            }
+        // ΔE (Eq. 29) in the paper's frame: the same number as in the caller's frame,
+        // where both factors of its tangential term change sign.
+        let delta_e = energy_change(sol.impulse, pb.v_a, sol.v_s);
+        if sol.failure.is_none() && is_clearly_coherent(&pb, &sol) && f.keep_in_range(&sol, delta_e)
+        {
+            return Ok(f.outcome(law, case, &c, &sol, delta_e, mirrored));
         }
     }
     solve_in_general(law, problem)
@@ -241,48 +242,6 @@ fn apply(law: Law, pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawS
         Law::KaneLevinson => kane_levinson::solve(pb, c),
         Law::Poisson => poisson::solve(pb, c),
         Law::Stronge => stronge::solve(pb, c),
-    }
-}
-
-/// A law's coherent solution at order one, brought back to the caller's frame.
-#[derive(Clone, Copy, Debug)]
-struct Coherent {
-    /// The sign case of Table 1.
-    case: SignCase,
-    /// g, h, p, q, Δ (paper's frame).
-    c: Coefficients,
-    /// The law's solution, in the caller's frame.
-    sol: LawSolution,
-    /// `ΔE` [P, Eq. (29)].
-    delta_e: Real,
-    /// Whether `t` was mirrored.
-    mirrored: bool,
-}
-
-impl Coherent {
-    /// A law's solution of `unit` (valid, at order one) that passes the coherence checks,
-    /// brought back to the caller's frame, with its `ΔE`.
-    #[inline(always)]
-    fn new(
-        unit: &ImpactProblem,
-        case: SignCase,
-        c: Coefficients,
-        mut sol: LawSolution,
-        mirrored: bool,
-    ) -> Self {
-        if mirrored {
-            sol.impulse.t = -sol.impulse.t;
-            sol.v_s.t = -sol.v_s.t;
-            sol.phases.mirror();
-        }
-        let delta_e = energy_change(sol.impulse, unit.v_a, sol.v_s);
-        Self {
-            case,
-            c,
-            sol,
-            delta_e,
-            mirrored,
-        }
     }
 }
 
@@ -357,9 +316,11 @@ fn is_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
 }
 
 /// Whether a solution passes the checks of [`check_coherence`] with the least tolerance,
-/// [`COHERENCE_TOL`] `(|v_n^A| + |v_t^A|)`, which is known before the solution: then it
-/// passes them (and [`is_coherent`] is true) without the long chain of sums of the full
-/// tolerance after the solution; when it does not, [`is_coherent`] decides.
+/// [`COHERENCE_TOL`] `(|v_n^A| + |v_t^A|)`, which is known before the solution, all but
+/// the finiteness of `I_n` (which [`Factors::keep_in_range`](scale::Factors) implies):
+/// then, with a finite `I_n`, it passes them (and [`is_coherent`] is true) without the long
+/// chain of sums of the full tolerance after the solution; when it does not,
+/// [`is_coherent`] decides.
 ///
 /// The full tolerance is a sum of non-negative terms that starts with
 /// `|v_n^A| + |v_t^A|`, rounded at each step, times a positive constant: rounding is
@@ -369,7 +330,23 @@ fn is_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
 /// a tolerance holds for a larger one.
 #[inline(always)]
 fn is_clearly_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
-    is_coherent_within(pb, sol, COHERENCE_TOL * (pb.v_a.n.abs() + pb.v_a.t.abs()))
+    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
+    let tol = COHERENCE_TOL * (v_a.n.abs() + v_a.t.abs());
+    let wi = w.apply(i);
+    // The sign of v_t^S, as bounds: |v_t^S| ≤ tol, v_t^S ≥ −tol, v_t^S ≤ tol.
+    let (lo, hi) = match sol.kind {
+        CollisionType::Sticking => (-tol, tol),
+        CollisionType::ForwardSliding => (-tol, Real::INFINITY),
+        CollisionType::ReverseSliding => (Real::NEG_INFINITY, tol),
+    };
+    // I_n finite is left to `Factors::keep_in_range`, which bounds |I_n|.
+    (i.n > 0.0)
+        & (v_s.n >= -tol)
+        & ((v_s.n - v_a.n - wi.n).abs() <= tol)
+        & ((v_s.t - v_a.t - wi.t).abs() <= tol)
+        & (i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL))
+        & (lo <= v_s.t)
+        & (v_s.t <= hi)
 }
 
 /// The checks of [`check_coherence`] with the absolute tolerance `tol`.

@@ -192,6 +192,21 @@ impl Phases {
         self
     }
 
+    /// The phases with every point and the velocity of approach mapped by `point` and
+    /// `velocity` (a change of frame or of scales).
+    #[inline(always)]
+    pub(super) fn map(
+        self,
+        point: impl Fn(&PathPoint) -> PathPoint,
+        velocity: impl Fn(ContactVelocity) -> ContactVelocity,
+    ) -> Self {
+        Self {
+            v_a: velocity(self.v_a),
+            ends: [point(&self.ends[0]), point(&self.ends[1])],
+            ..self
+        }
+    }
+
     /// Mirrors the phases into the frame whose tangent is `−t`.
     #[inline(always)]
     pub(super) fn mirror(&mut self) {
@@ -204,9 +219,6 @@ impl Phases {
 }
 
 /// Routh's path for given `W`, `μ` and a velocity of approach with `v_t^A ≥ 0`.
-///
-/// The point G and the slope after it are computed where they are used (their divisions
-/// cost as much as the rest of a law), from the data kept here.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RouthPath {
     /// The origin: no impulse yet, velocity `v^A`.
@@ -215,14 +227,12 @@ pub struct RouthPath {
     slide: Slope,
     /// `Ĩ_n(G)` where the slip stops [P, Eq. (58)]; infinite when it never does.
     i_g: Real,
+    /// The point G (meaningful when `i_g` is finite).
+    at_g: PathPoint,
     /// The mode after G: sticking or reverse sliding.
     after: CollisionType,
-    /// `W`, for the slope of sticking.
-    w: ImpactMatrix,
-    /// `Δ` [P, Eq. (24)], for the slope of sticking.
-    det: Real,
-    /// `μ`, `q`, `p`: the slope of reverse sliding.
-    reverse: Slope,
+    /// Phase 2 along `L_ST` or `L_RS`.
+    after_slope: Slope,
 }
 
 impl RouthPath {
@@ -271,57 +281,43 @@ impl RouthPath {
         } else {
             Real::INFINITY
         };
-        let after = if p >= 0.0 {
-            CollisionType::Sticking
+        let mut at_g = slide.advance(&origin, if i_g.is_finite() { i_g } else { 0.0 });
+        // At G the slip is zero by definition (Eq. 39); do not keep the rounding residue.
+        at_g.v.t = 0.0;
+        let (after, after_slope) = if p >= 0.0 {
+            // Sticking. With m_tt = 0 (then m_nt = 0) the tangential impulse does nothing:
+            // take the least, I_t = 0, and v_n grows at m_nn. With a singular W and
+            // m_tt > 0, Δ = 0 and v_n is frozen: the contact jams.
+            let (di_t, dv_n) = if w.tt > 0.0 {
+                (-w.nt / w.tt, c.det / w.tt)
+            } else {
+                (0.0, w.nn)
+            };
+            (
+                CollisionType::Sticking,
+                Slope {
+                    di_t,
+                    dv_n,
+                    dv_t: 0.0,
+                },
+            )
         } else {
-            CollisionType::ReverseSliding
+            (
+                CollisionType::ReverseSliding,
+                Slope {
+                    di_t: mu,
+                    dv_n: q,
+                    dv_t: p,
+                },
+            )
         };
         Self {
             origin,
             slide,
             i_g,
+            at_g,
             after,
-            w: *w,
-            det: c.det,
-            reverse: Slope {
-                di_t: mu,
-                dv_n: q,
-                dv_t: p,
-            },
-        }
-    }
-
-    /// The point G, where the slip stops (meaningful when `Ĩ_n(G)` is finite).
-    #[inline(always)]
-    fn at_g(&self) -> PathPoint {
-        let i_g = self.i_g;
-        let mut at_g = (self.slide).advance(&self.origin, if i_g.is_finite() { i_g } else { 0.0 });
-        // At G the slip is zero by definition (Eq. 39); do not keep the rounding residue.
-        at_g.v.t = 0.0;
-        at_g
-    }
-
-    /// The slope of phase 2, along `L_ST` or `L_RS`.
-    #[inline(always)]
-    fn after_slope(&self) -> Slope {
-        match self.after {
-            // Sticking. With m_tt = 0 (then m_nt = 0) the tangential impulse does nothing:
-            // take the least, I_t = 0, and v_n grows at m_nn. With a singular W and
-            // m_tt > 0, Δ = 0 and v_n is frozen: the contact jams.
-            CollisionType::Sticking => {
-                let w = &self.w;
-                let (di_t, dv_n) = if w.tt > 0.0 {
-                    (-w.nt / w.tt, self.det / w.tt)
-                } else {
-                    (0.0, w.nn)
-                };
-                Slope {
-                    di_t,
-                    dv_n,
-                    dv_t: 0.0,
-                }
-            }
-            _ => self.reverse,
+            after_slope,
         }
     }
 
@@ -357,7 +353,7 @@ impl RouthPath {
             }
             pt
         } else {
-            self.after_slope().advance(&self.at_g(), i_n - self.i_g)
+            self.after_slope.advance(&self.at_g, i_n - self.i_g)
         }
     }
 
@@ -375,14 +371,10 @@ impl RouthPath {
                 return Some(x);
             }
         }
-        if !self.i_g.is_finite() {
+        if !self.i_g.is_finite() || self.after_slope.dv_n <= 0.0 {
             return None;
         }
-        let after = self.after_slope();
-        if after.dv_n <= 0.0 {
-            return None;
-        }
-        let x = (target - self.at_g().v.n) / after.dv_n;
+        let x = (target - self.at_g.v.n) / self.after_slope.dv_n;
         (x >= 0.0).then_some(self.i_g + x)
     }
 
@@ -397,7 +389,7 @@ impl RouthPath {
         let (mut p0, mut slope, mut room) = if from.i.n < self.i_g {
             (*from, self.slide, self.i_g - from.i.n)
         } else {
-            (*from, self.after_slope(), Real::INFINITY)
+            (*from, self.after_slope, Real::INFINITY)
         };
         loop {
             let x = rising_root(p0.v.n, slope.dv_n, remaining)?;
@@ -406,8 +398,8 @@ impl RouthPath {
             }
             // The phase ends first: spend its work and go on after G.
             remaining -= room * (p0.v.n + 0.5 * slope.dv_n * room);
-            p0 = self.at_g();
-            slope = self.after_slope();
+            p0 = self.at_g;
+            slope = self.after_slope;
             room = Real::INFINITY;
         }
     }
@@ -426,7 +418,7 @@ impl RouthPath {
             Phases::two(
                 v_a,
                 CollisionType::ForwardSliding,
-                self.at_g(),
+                self.at_g,
                 self.after,
                 end,
             )

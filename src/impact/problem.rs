@@ -221,6 +221,9 @@ fn power_of_ten(x: Real) -> String {
 /// working precision: the closed forms would divide by rounding noise.
 const SINGULAR_RELATIVE_DET: Real = 16.0 * Real::EPSILON;
 
+/// The largest `μ` that [`ImpactProblem::at_moderate_scale`] takes (exclusive): `2^500`.
+const MODERATE_FRICTION: Real = Real::from_bits((1023 + 500) << 52);
+
 /// `|x|` as its bit pattern, which orders like `|x|` (NaN above infinity).
 #[inline(always)]
 fn magnitude(x: Real) -> u64 {
@@ -279,9 +282,11 @@ impl ImpactProblem {
     }
 
     /// [`at_order_one`](Self::at_order_one) for the usual problems: valid, with the
-    /// largest entries of `W` and `v^A` between `2^-340` and `2^341`. Then every power of
-    /// two by which an answer scales (`c/s`, `c`, `c²/s`, `s`, `s²`) is a normal double,
-    /// and the powers of two come as [`Factors`]. `None` for the others (invalid data
+    /// largest entries of `W` and `v^A` between `2^-340` and `2^341` and `μ < 2^500`. Then
+    /// every power of two by which an answer scales (`c/s`, `c`, `c²/s`, `s`, `s²`) is a
+    /// normal double, and the powers of two come as [`Factors`]; and g, h, p, q, below
+    /// `2^502` at order one (the entries of `W` are below 2), stay below `2^842` at the
+    /// caller's scale. `None` for the others (invalid data
     /// included): [`at_order_one`](Self::at_order_one) tells which.
     #[inline(always)]
     pub(super) fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
@@ -291,15 +296,16 @@ impl ImpactProblem {
         let w_max = magnitude(w.nn).max(magnitude(w.nt)).max(magnitude(w.tt));
         let v_max = magnitude(v.n).max(magnitude(v.t));
         let scale = Scale::of_moderate_magnitudes(w_max, v_max)?;
-        let unit = scale.matrix_down(&self.w);
-        let valid = (unit.nn > 0.0)
-            & (unit.tt >= 0.0)
-            & (unit.det() >= -SINGULAR_RELATIVE_DET * unit.nn * unit.tt)
+        let unit = scale.down_moderate(self);
+        let w = &unit.w;
+        let valid = (w.nn > 0.0)
+            & (w.tt >= 0.0)
+            & (w.det() >= -SINGULAR_RELATIVE_DET * w.nn * w.tt)
             & (self.v_a.n < 0.0)
             & (0.0..=1.0).contains(&self.e)
             & (self.mu >= 0.0)
-            & (self.mu < Real::INFINITY);
-        valid.then(|| (scale.factors(), scale.down(self, unit)))
+            & (self.mu < MODERATE_FRICTION);
+        valid.then(|| (scale.factors(), unit))
     }
 
     /// The error of a `W` that is not positive semidefinite (the slow path of `validate`).

@@ -28,9 +28,11 @@
 //! ([`ImpactError::OutOfRange`]).
 
 use super::coefficients::Coefficients;
+use super::coefficients::SignCase;
 use super::outcome::Outcome;
+use super::path::PathPoint;
 use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem, Impulse};
-use super::{Coherent, Law};
+use super::{Law, LawSolution};
 use crate::math::Real;
 
 /// The powers of two `s = 2^w` and `c = 2^v` of a problem's `W` and `v^A`.
@@ -54,11 +56,29 @@ impl Scale {
         }
     }
 
-    /// [`Scale::of_magnitudes`] when both powers of two lie in `[2^-340, 2^340]`.
+    /// [`Scale::of_magnitudes`] when both powers of two lie in `[2^-340, 2^340]` (biased
+    /// exponents within `1023 ± 340`).
     #[inline(always)]
     pub(super) fn of_moderate_magnitudes(w_max: u64, v_max: u64) -> Option<Self> {
-        let (w, v) = ((w_max >> 52) as i32 - 1023, (v_max >> 52) as i32 - 1023);
-        (w.unsigned_abs() <= MODERATE && v.unsigned_abs() <= MODERATE).then_some(Self { w, v })
+        let biased = |bits: u64| (bits >> 52) as u32;
+        let moderate = |bits: u64| biased(bits).wrapping_sub(1023 - MODERATE) <= 2 * MODERATE;
+        (moderate(w_max) & moderate(v_max)).then(|| Self {
+            w: biased(w_max) as i32 - 1023,
+            v: biased(v_max) as i32 - 1023,
+        })
+    }
+
+    /// [`Scale::down`] of [`Scale::matrix_down`] at moderate scales: the same products by
+    /// `2^-log2 s` and `2^-log2 c` (normal doubles), without [`ldexp`]'s test of the range.
+    #[inline(always)]
+    pub(super) fn down_moderate(&self, pb: &ImpactProblem) -> ImpactProblem {
+        let (s, c) = (pow2(-self.w), pow2(-self.v));
+        let w = &pb.w;
+        ImpactProblem {
+            w: ImpactMatrix::new(w.nn * s, w.nt * s, w.tt * s),
+            v_a: ContactVelocity::new(pb.v_a.n * c, pb.v_a.t * c),
+            ..*pb
+        }
     }
 
     /// The powers of two of [`exponents`](Scale::exponents) as numbers, for moderate
@@ -74,7 +94,7 @@ impl Scale {
             work: pow2(k.work),
             coefficient: pow2(k.coefficient),
             det: pow2(k.det),
-            limit: pow2(1023 - k.impulse.max(k.work).max(k.coefficient).max(0)),
+            limit: pow2(1023 - k.impulse.max(k.work).max(0)),
         }
     }
 
@@ -223,8 +243,8 @@ pub(super) struct Factors {
     work: Real,
     coefficient: Real,
     det: Real,
-    /// `2^(1023 − k)` for the largest `k ≥ 0` of the impulses, the works and g, h, p, q:
-    /// a number of these kinds below it at order one stays below `2^1023` once scaled.
+    /// `2^(1023 − k)` for the largest `k ≥ 0` of the impulses and the works: a number of
+    /// these kinds below it at order one stays below `2^1023` once scaled.
     limit: Real,
 }
 
@@ -252,48 +272,68 @@ impl Rescale for Factors {
 }
 
 impl Factors {
-    /// The outcome at the caller's scales of a coherent solution at order one: each kind
-    /// of quantity multiplied by its power of two, which is exact and equal, bit for bit,
-    /// to [`Scale::up`]'s [`ldexp`] where [`keep_in_range`](Self::keep_in_range) holds.
+    /// The outcome in the caller's frame and scales of a law's solution `sol` in the
+    /// paper's frame at order one, with its `ΔE`: the tangential components change sign
+    /// where `t` was mirrored (Eq. 10), and each kind of quantity is multiplied by its
+    /// power of two. A product by `±2^k` is exact, and the same number as the mirrored
+    /// component times `2^k`: bit for bit [`Scale::up`] (with its [`ldexp`]) of the
+    /// mirrored solution, where [`keep_in_range`](Self::keep_in_range) holds.
     #[inline(always)]
-    pub(super) fn outcome(&self, law: Law, s: &Coherent) -> Outcome {
-        let (sol, end) = (&s.sol, s.sol.phases.end());
+    pub(super) fn outcome(
+        &self,
+        law: Law,
+        case: SignCase,
+        c: &Coefficients,
+        sol: &LawSolution,
+        delta_e: Real,
+        mirrored: bool,
+    ) -> Outcome {
+        let sign = if mirrored { -1.0 } else { 1.0 };
+        let (impulse_t, velocity_t) = (sign * self.impulse, sign * self.velocity);
+        let impulse = |i: Impulse| Impulse::new(self.impulse(i.n), i.t * impulse_t);
+        let velocity =
+            |v: ContactVelocity| ContactVelocity::new(self.velocity(v.n), v.t * velocity_t);
+        let point = |p: &PathPoint| PathPoint {
+            i: impulse(p.i),
+            v: velocity(p.v),
+            work_n: self.work(p.work_n),
+            work_t: self.work(p.work_t),
+        };
+        let end = sol.phases.end();
         Outcome {
             law,
             kind: sol.kind,
-            case: s.case,
-            coefficients: s.c.scaled(self),
-            impulse: Impulse::new(self.impulse(sol.impulse.n), self.impulse(sol.impulse.t)),
-            v_s: ContactVelocity::new(self.velocity(sol.v_s.n), self.velocity(sol.v_s.t)),
-            phases: sol.phases.scaled(self),
-            delta_e: self.work(s.delta_e),
+            case,
+            coefficients: c.scaled(self),
+            impulse: impulse(sol.impulse),
+            v_s: velocity(sol.v_s),
+            phases: sol.phases.map(point, velocity),
+            delta_e: self.work(delta_e),
             work_n: self.work(end.work_n),
             work_t: self.work(end.work_t),
-            mirrored: s.mirrored,
+            mirrored,
         }
     }
 
-    /// Whether [`outcome`](Self::outcome) keeps the solution `s` at order one in the range
-    /// of doubles where [`Scale::up`] checks it (`beyond_range`): the numbers it checks
-    /// stay finite, and `I_n > 0` does not become 0. The numbers are compared at order one
-    /// with `limit`, so that the check does not wait for the products.
+    /// Whether [`outcome`](Self::outcome) keeps the solution `sol` at order one, of a
+    /// problem from [`ImpactProblem::at_moderate_scale`], in the range of doubles where
+    /// [`Scale::up`] checks it (`beyond_range`): the numbers it checks stay finite, and
+    /// `I_n > 0` does not become 0. The impulses and works are compared at order one with
+    /// `limit`, so that the check does not wait for the products (their magnitudes are
+    /// the same in either frame); g, h, p, q stay finite at moderate scales.
     #[inline(always)]
-    pub(super) fn keep_in_range(&self, s: &Coherent) -> bool {
+    pub(super) fn keep_in_range(&self, sol: &LawSolution, delta_e: Real) -> bool {
         // The last phase ends at the impulse with the works, so the end of the first phase
         // stands for the phases.
-        let (i, c) = (s.sol.impulse, &s.c);
-        let (end, first) = (s.sol.phases.end(), s.sol.phases.first_end());
+        let i = sol.impulse;
+        let (end, first) = (sol.phases.end(), sol.phases.first_end());
         debug_assert!(end.i == i, "the phase ends at I");
         let small = |x: Real| x.abs() < self.limit;
         let finite = small(i.n)
             & small(i.t)
-            & small(s.delta_e)
+            & small(delta_e)
             & small(end.work_n)
             & small(end.work_t)
-            & small(c.g)
-            & small(c.h)
-            & small(c.p)
-            & small(c.q)
             & small(first.i.n)
             & small(first.i.t)
             & small(first.work_n)
@@ -428,7 +468,9 @@ fn pow2(k: i32) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::impact::{Law, apply, is_clearly_coherent, paper_frame, solve_at_order_one};
+    use crate::impact::{
+        Law, apply, energy_change, is_clearly_coherent, paper_frame, solve_at_order_one,
+    };
 
     /// The one pass of [`solve`](crate::impact::solve) (the law at order one, then a
     /// product by each power of two, [`Factors::outcome`]) gives the general path's answer
@@ -452,11 +494,12 @@ mod tests {
             let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
             let case = c.sign_case();
             let sol = apply(law, &pb, &c, case);
+            let delta_e = energy_change(sol.impulse, pb.v_a, sol.v_s);
             if sol.failure.is_some() || !is_clearly_coherent(&pb, &sol) {
                 return None;
             }
-            let sol = Coherent::new(&unit, case, c, sol, mirrored);
-            f.keep_in_range(&sol).then(|| f.outcome(law, &sol))
+            (f.keep_in_range(&sol, delta_e))
+                .then(|| f.outcome(law, case, &c, &sol, delta_e, mirrored))
         };
         let (mut in_place, mut declined, mut errors, mut needless) = (0, 0, 0, 0);
         for k in 0..20_000 {
