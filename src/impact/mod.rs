@@ -163,8 +163,13 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 /// their largest entries and the answer is scaled back (the laws are homogeneous; see
 /// `scale.rs`), so that it holds over the whole range of finite doubles. An answer beyond
 /// that range is [`ImpactError::OutOfRange`].
+///
+/// Usual problems (valid, with the largest entries of `W` and `v^A` within `2^±340` and
+/// `μ < 2^500`) are solved in one pass, checked and scaled back without leaving the
+/// registers; the others, and the rare answers that the one pass cannot accept at once,
+/// take the general path. Both give the same numbers, bit for bit.
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
-    // One function per law: each is a straight line for the registers.
+    // The law's kernel inlined in each arm: each arm is a straight line for the registers.
     match law {
         Law::Newton => solve_by(Law::Newton, problem, newton::solve),
         Law::KaneLevinson => solve_by(Law::KaneLevinson, problem, |pb, c, _| {
@@ -176,7 +181,7 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
 }
 
 /// [`solve`] with the law's solution in the paper's frame given by `apply`.
-#[inline(never)]
+#[inline(always)]
 fn solve_by(
     law: Law,
     problem: &ImpactProblem,
@@ -221,15 +226,13 @@ fn solve_in_general(law: Law, problem: &ImpactProblem) -> Result<Outcome, Impact
 /// `v_t^A < 0`, `m_nt → −m_nt` and `v_t^A → −v_t^A`; and whether it was mirrored.
 #[inline(always)]
 fn paper_frame(problem: &ImpactProblem) -> (ImpactProblem, bool) {
+    // A product by ±1 is exact: −m_nt and −v_t^A when mirrored, the same numbers otherwise.
     let mirrored = problem.v_a.t < 0.0;
-    let pb = if mirrored {
-        ImpactProblem {
-            w: problem.w.mirrored(),
-            v_a: ContactVelocity::new(problem.v_a.n, -problem.v_a.t),
-            ..*problem
-        }
-    } else {
-        *problem
+    let sign = if mirrored { -1.0 } else { 1.0 };
+    let pb = ImpactProblem {
+        w: ImpactMatrix::new(problem.w.nn, problem.w.nt * sign, problem.w.tt),
+        v_a: ContactVelocity::new(problem.v_a.n, problem.v_a.t * sign),
+        ..*problem
     };
     (pb, mirrored)
 }
