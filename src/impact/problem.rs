@@ -282,12 +282,12 @@ impl ImpactProblem {
     }
 
     /// [`at_order_one`](Self::at_order_one) for the usual problems: valid, with the
-    /// largest entries of `W` and `v^A` between `2^-340` and `2^341` and `μ < 2^500`. Then
-    /// every power of two by which an answer scales (`c/s`, `c`, `c²/s`, `s`, `s²`) is a
-    /// normal double, and the powers of two come as [`Factors`]; and g, h, p, q, below
-    /// `2^502` at order one (the entries of `W` are below 2), stay below `2^842` at the
-    /// caller's scale. `None` for the others (invalid data
-    /// included): [`at_order_one`](Self::at_order_one) tells which.
+    /// largest entries of `W` and `v^A` in `[2^-340, 2^341)` and `μ < 2^500`. Then every
+    /// power of two by which an answer scales (`c/s`, `c`, `c²/s`, `s`, `s²`) is a normal
+    /// double, and the powers of two come as [`Factors`]; and g, h, p, q, below `2^502` at
+    /// order one (the entries of `W` are below 2), stay below `2^842` at the caller's
+    /// scale. `None` for the others, invalid data included
+    /// ([`at_order_one`](Self::at_order_one) tells which error).
     #[inline(always)]
     pub(super) fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
         // The exponents of the largest magnitudes, from their bits (0 and subnormals,

@@ -394,8 +394,8 @@ fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32
 }
 
 /// The largest `|log2 s|` and `|log2 c|` of the scales that [`solve`](super::solve) takes
-/// in one pass: every power of two of [`Scale::exponents`] (at most `2 · 340`) is then
-/// that of a normal double.
+/// in one pass: every power of two of [`Scale::exponents`] (at most `3 · 340 = 1020` in
+/// magnitude, for the works' `c²/s`) is then that of a normal double.
 const MODERATE: u32 = 340;
 
 /// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
