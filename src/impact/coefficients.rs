@@ -39,7 +39,7 @@ impl Coefficients {
     /// `g = μ m_tt − m_nt`, `h = m_nn − μ m_nt`, `p = μ m_tt + m_nt`, `q = m_nn + μ m_nt`,
     /// `Δ = m_nn m_tt − m_nt²`. Identities (used by the tests): `g + p = 2μ m_tt`,
     /// `h + q = 2 m_nn`, `g q + h p = 2μΔ` [P, Eq. (37)].
-    #[inline]
+    #[inline(always)]
     pub fn new(w: &ImpactMatrix, mu: Real, v_a: ContactVelocity) -> Self {
         Self {
             g: mu * w.tt - w.nt,
@@ -55,7 +55,7 @@ impl Coefficients {
     /// The coefficients of the problem `(s W, c v^A)` from those of `(W, v^A)`, with the
     /// powers of two of [`Scale::exponents`](super::scale::Scale::exponents): g, h, p, q
     /// scale by `s`, `Δ` by `s²`, the velocities by `c`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn scaled<R: Rescale>(&self, k: &R) -> Self {
         Self {
             g: k.coefficient(self.g),
@@ -89,7 +89,7 @@ impl Coefficients {
     /// `h + q = 2 m_nn > 0` and `g q + h p = 2μΔ ≥ 0`. A zero is counted as positive: by
     /// [P, Comment g] the equal signs can be added to the inequalities of the table and
     /// the solution stays the same on either side.
-    #[inline]
+    #[inline(always)]
     pub fn sign_case(&self) -> SignCase {
         if self.g < 0.0 {
             SignCase::Five

@@ -6,6 +6,7 @@ use super::outcome::CollisionType;
 use super::path::{PathPoint, Phases};
 use super::problem::{ContactVelocity, ImpactProblem, Impulse};
 use super::{Failure, LawSolution};
+use crate::math::Real;
 
 /// One single-phase candidate and whether it is coherent.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,65 +35,111 @@ pub struct Candidate {
 ///
 /// The boundaries are closed on the side of forward sliding (`v_t^S = 0`) and of
 /// sticking (against reverse sliding), where the candidates coincide.
-#[inline]
+#[inline(always)]
 pub fn candidates(pb: &ImpactProblem, c: &Coefficients) -> [Candidate; 3] {
+    let sides = Sides::of(pb, c);
+    [
+        candidate(CollisionType::Sticking, pb, c, &sides),
+        candidate(CollisionType::ReverseSliding, pb, c, &sides),
+        candidate(CollisionType::ForwardSliding, pb, c, &sides),
+    ]
+}
+
+/// The two products whose signs place `α` against the boundaries of [P, Appendix C]:
+/// `h v_t^A − (1+e) g V` (Eqs. 74, 80) and `q v_t^A + (1+e) p V` (Eqs. 74, 77).
+struct Sides {
+    forward: Real,
+    reverse: Real,
+}
+
+impl Sides {
+    #[inline(always)]
+    fn of(pb: &ImpactProblem, c: &Coefficients) -> Self {
+        let (e, big_v, vt) = (pb.e, -pb.v_a.n, pb.v_a.t);
+        Self {
+            forward: c.h * vt - (1.0 + e) * c.g * big_v,
+            reverse: c.q * vt + (1.0 + e) * c.p * big_v,
+        }
+    }
+}
+
+/// Whether the candidate of the given type is coherent (see [`candidates`]); computes no
+/// impulse.
+#[inline(always)]
+fn is_coherent(kind: CollisionType, pb: &ImpactProblem, c: &Coefficients, s: &Sides) -> bool {
+    match kind {
+        CollisionType::Sticking if c.det > 0.0 => s.forward < 0.0 && s.reverse >= 0.0,
+        CollisionType::Sticking => pb.w.tt == 0.0 && pb.v_a.t == 0.0,
+        CollisionType::ReverseSliding => c.q > 0.0 && s.reverse < 0.0,
+        CollisionType::ForwardSliding => c.h > 0.0 && s.forward >= 0.0,
+    }
+}
+
+/// The candidate of the given type (see [`candidates`]).
+#[inline(always)]
+fn candidate(kind: CollisionType, pb: &ImpactProblem, c: &Coefficients, s: &Sides) -> Candidate {
     let (e, mu, w) = (pb.e, pb.mu, &pb.w);
     let big_v = -pb.v_a.n;
     let vt = pb.v_a.t;
     let v_n_s = e * big_v;
-    let forward_side = c.h * vt - (1.0 + e) * c.g * big_v;
-    let reverse_side = c.q * vt + (1.0 + e) * c.p * big_v;
-    // DEVIATION from Eq. (73), which needs Δ > 0: with a singular W, W I = ((1+e)V, −v_t^A)
-    // has (generically) no solution when m_tt > 0; when m_tt = 0 it has one with I_t free
-    // if v_t^A = 0, and the least is I_t = 0.
-    let stick = if c.det > 0.0 {
-        Candidate {
-            kind: CollisionType::Sticking,
-            impulse: Impulse::new(
+    let (impulse, v_t_s) = match kind {
+        CollisionType::Sticking if c.det > 0.0 => (
+            Impulse::new(
                 ((1.0 + e) * w.tt * big_v + w.nt * vt) / c.det,
                 -(w.nn * vt + (1.0 + e) * w.nt * big_v) / c.det,
             ),
-            v_s: ContactVelocity::new(v_n_s, 0.0),
-            coherent: forward_side < 0.0 && reverse_side >= 0.0,
+            0.0,
+        ),
+        // DEVIATION from Eq. (73), which needs Δ > 0: with a singular W,
+        // W I = ((1+e)V, −v_t^A) has (generically) no solution when m_tt > 0; when m_tt = 0
+        // it has one with I_t free if v_t^A = 0, and the least is I_t = 0.
+        CollisionType::Sticking => (Impulse::new((1.0 + e) * big_v / w.nn, 0.0), 0.0),
+        CollisionType::ReverseSliding => {
+            let i_rev = (1.0 + e) * big_v / c.q;
+            (
+                Impulse::new(i_rev, mu * i_rev),
+                vt + (1.0 + e) * c.p * big_v / c.q,
+            )
         }
-    } else {
-        Candidate {
-            kind: CollisionType::Sticking,
-            impulse: Impulse::new((1.0 + e) * big_v / w.nn, 0.0),
-            v_s: ContactVelocity::new(v_n_s, 0.0),
-            coherent: w.tt == 0.0 && vt == 0.0,
+        CollisionType::ForwardSliding => {
+            let i_fwd = (1.0 + e) * big_v / c.h;
+            (
+                Impulse::new(i_fwd, -mu * i_fwd),
+                vt - (1.0 + e) * c.g * big_v / c.h,
+            )
         }
     };
-    let i_rev = (1.0 + e) * big_v / c.q;
-    let reverse = Candidate {
-        kind: CollisionType::ReverseSliding,
-        impulse: Impulse::new(i_rev, mu * i_rev),
-        v_s: ContactVelocity::new(v_n_s, vt + (1.0 + e) * c.p * big_v / c.q),
-        coherent: c.q > 0.0 && reverse_side < 0.0,
-    };
-    let i_fwd = (1.0 + e) * big_v / c.h;
-    let forward = Candidate {
-        kind: CollisionType::ForwardSliding,
-        impulse: Impulse::new(i_fwd, -mu * i_fwd),
-        v_s: ContactVelocity::new(v_n_s, vt - (1.0 + e) * c.g * big_v / c.h),
-        coherent: c.h > 0.0 && forward_side >= 0.0,
-    };
-    [stick, reverse, forward]
+    Candidate {
+        kind,
+        impulse,
+        v_s: ContactVelocity::new(v_n_s, v_t_s),
+        coherent: is_coherent(kind, pb, c, s),
+    }
 }
 
 /// Solves the problem (paper's frame) by the theory of [P, Appendix C]: the coherent one
-/// of the three single-phase candidates. Its phase is the straight segment from the
-/// origin of the impulse plane to `(I_n, I_t)`, along which the works are
-/// `½ I_n (v_n^A + v_n^S)` and `½ I_t (v_t^A + v_t^S)`, the two terms of Eq. (29).
-#[inline]
+/// of the three single-phase candidates (the first, in the order of [`candidates`], when
+/// they coincide on a boundary). Its phase is the straight segment from the origin of the
+/// impulse plane to `(I_n, I_t)`, along which the works are `½ I_n (v_n^A + v_n^S)` and
+/// `½ I_t (v_t^A + v_t^S)`, the two terms of Eq. (29).
+#[inline(always)]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
-    let Some(chosen) = candidates(pb, c).into_iter().find(|k| k.coherent) else {
+    // Only the coherent candidate is computed.
+    let sides = Sides::of(pb, c);
+    let Some(kind) = [
+        CollisionType::Sticking,
+        CollisionType::ReverseSliding,
+        CollisionType::ForwardSliding,
+    ]
+    .into_iter()
+    .find(|&kind| is_coherent(kind, pb, c, &sides)) else {
         return LawSolution::failed(if c.det == 0.0 {
             Failure::Jam
         } else {
             Failure::Incoherent("no coherent candidate (Appendix C says there always is one)")
         });
     };
+    let chosen = candidate(kind, pb, c, &sides);
     let (i, v_a, v_s) = (chosen.impulse, pb.v_a, chosen.v_s);
     let end = PathPoint {
         i,

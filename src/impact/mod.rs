@@ -163,18 +163,56 @@ fn incoherent(law: &'static str, detail: String) -> ImpactError {
 /// their largest entries and the answer is scaled back (the laws are homogeneous; see
 /// `scale.rs`), so that it holds over the whole range of finite doubles. An answer beyond
 /// that range is [`ImpactError::OutOfRange`].
+///
+/// Usual problems (valid, with the largest entries of `W` and `v^A` within `2^±340` and
+/// `μ < 2^500`) are solved in one pass, checked and scaled back without leaving the
+/// registers; the others, and the rare answers that the one pass cannot accept at once,
+/// take the general path. Both give the same numbers, bit for bit.
 pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
+    // The law's kernel inlined in each arm: each arm is a straight line for the registers.
+    match law {
+        Law::Newton => solve_by(Law::Newton, problem, newton::solve),
+        Law::KaneLevinson => solve_by(Law::KaneLevinson, problem, |pb, c, _| {
+            kane_levinson::solve(pb, c)
+        }),
+        Law::Poisson => solve_by(Law::Poisson, problem, |pb, c, _| poisson::solve(pb, c)),
+        Law::Stronge => solve_by(Law::Stronge, problem, |pb, c, _| stronge::solve(pb, c)),
+    }
+}
+
+/// [`solve`] with the law's solution in the paper's frame given by `apply`.
+#[inline(always)]
+fn solve_by(
+    law: Law,
+    problem: &ImpactProblem,
+    apply: impl Fn(&ImpactProblem, &Coefficients, SignCase) -> LawSolution,
+) -> Result<Outcome, ImpactError> {
+    // The usual case in one pass: valid data of moderate scales, the law's answer
+    // clearly coherent and within the range of doubles at the caller's scales.
+    if let Some((f, unit)) = problem.at_moderate_scale() {
+        let (pb, mirrored) = paper_frame(&unit);
+        let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
+        let case = c.sign_case();
+        let sol = apply(&pb, &c, case);
+        // ΔE (Eq. 29) in the paper's frame: the same number as in the caller's frame,
+        // where both factors of its tangential term change sign.
+        let delta_e = energy_change(sol.impulse, pb.v_a, sol.v_s);
+        if sol.failure.is_none() && is_clearly_coherent(&pb, &sol) && f.keep_in_range(&sol, delta_e)
+        {
+            return Ok(f.outcome(law, case, &c, &sol, delta_e, mirrored));
+        }
+    }
+    solve_in_general(law, problem)
+}
+
+/// [`solve`] for the cases its one pass declines: invalid data, extreme scales, answers
+/// beyond the range of doubles, and the errors of the law.
+#[cold]
+#[inline(never)]
+fn solve_in_general(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     let (scale, unit) = problem.at_order_one()?;
     match solve_at_order_one(law, &unit) {
-        Ok(mut out) => {
-            if scale.up_in_place(&mut out) {
-                Ok(out)
-            } else {
-                // Extreme scales, or an answer beyond the range: the general path, on the
-                // answer at order one computed again.
-                scale.up(solve_at_order_one(law, &unit)?)
-            }
-        }
+        Ok(out) => scale.up(out),
         // Not a bug of the law when the data do not fit in doubles at order one.
         Err(ImpactError::Incoherent { law, detail }) => match scale.out_of_scale(problem, &unit) {
             Some(why) => Err(ImpactError::IllConditioned { law, why, detail }),
@@ -184,28 +222,40 @@ pub fn solve(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> 
     }
 }
 
+/// The problem in the paper's frame, `t` oriented so that `v_t^A ≥ 0` [P, Eq. (10)]: for
+/// `v_t^A < 0`, `m_nt → −m_nt` and `v_t^A → −v_t^A`; and whether it was mirrored.
+#[inline(always)]
+fn paper_frame(problem: &ImpactProblem) -> (ImpactProblem, bool) {
+    // A product by ±1 is exact: −m_nt and −v_t^A when mirrored, the same numbers otherwise.
+    let mirrored = problem.v_a.t < 0.0;
+    let sign = if mirrored { -1.0 } else { 1.0 };
+    let pb = ImpactProblem {
+        w: ImpactMatrix::new(problem.w.nn, problem.w.nt * sign, problem.w.tt),
+        v_a: ContactVelocity::new(problem.v_a.n, problem.v_a.t * sign),
+        ..*problem
+    };
+    (pb, mirrored)
+}
+
+/// The law's solution of a problem in the paper's frame.
+#[inline(always)]
+fn apply(law: Law, pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
+    match law {
+        Law::Newton => newton::solve(pb, c, case),
+        Law::KaneLevinson => kane_levinson::solve(pb, c),
+        Law::Poisson => poisson::solve(pb, c),
+        Law::Stronge => stronge::solve(pb, c),
+    }
+}
+
 /// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
 /// `[1, 2)`.
-#[inline]
+#[inline(never)]
 fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
-    let mirrored = problem.v_a.t < 0.0;
-    let pb = if mirrored {
-        ImpactProblem {
-            w: problem.w.mirrored(),
-            v_a: ContactVelocity::new(problem.v_a.n, -problem.v_a.t),
-            ..*problem
-        }
-    } else {
-        *problem
-    };
+    let (pb, mirrored) = paper_frame(problem);
     let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
     let case = c.sign_case();
-    let mut sol = match law {
-        Law::Newton => newton::solve(&pb, &c, case),
-        Law::KaneLevinson => kane_levinson::solve(&pb, &c),
-        Law::Poisson => poisson::solve(&pb, &c),
-        Law::Stronge => stronge::solve(&pb, &c),
-    };
+    let mut sol = apply(law, &pb, &c, case);
     match sol.failure {
         None => {}
         Some(Failure::Jam) => return Err(ImpactError::Jam { law: law.name() }),
@@ -240,34 +290,85 @@ const COHERENCE_TOL: Real = 1e-7;
 /// Checks a solution (paper's frame) against the coherence conditions of [P, Sect. 4.2]
 /// and the momentum relations (22)–(23): `I_n > 0`, `v_n^S ≥ 0`, `|I_t| ≤ μ I_n`, the sign
 /// of `v_t^S` matching the type, `v^S − v^A = W I`.
-#[inline]
 fn check_coherence(law: Law, pb: &ImpactProblem, sol: &LawSolution) -> Result<(), ImpactError> {
-    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
-    let wi = w.apply(i);
+    if is_coherent(pb, sol) {
+        Ok(())
+    } else {
+        Err(incoherence(law, pb, sol, coherence_tolerance(pb, sol)))
+    }
+}
+
+/// The absolute tolerance of the coherence checks: [`COHERENCE_TOL`] times the sum of the
+/// magnitudes of the terms of Eqs. (22)–(23).
+#[inline(always)]
+fn coherence_tolerance(pb: &ImpactProblem, sol: &LawSolution) -> Real {
+    let (i, v_a, w) = (sol.impulse, pb.v_a, &pb.w);
     let scale = v_a.n.abs()
         + v_a.t.abs()
         + (w.nn * i.n).abs()
         + (w.nt * i.t).abs()
         + (w.nt * i.n).abs()
         + (w.tt * i.t).abs();
-    let tol = COHERENCE_TOL * scale;
+    COHERENCE_TOL * scale
+}
+
+/// Whether a solution passes the checks of [`check_coherence`].
+#[inline(always)]
+fn is_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
+    is_coherent_within(pb, sol, coherence_tolerance(pb, sol))
+}
+
+/// Whether a solution passes the checks of [`check_coherence`] with the least tolerance,
+/// [`COHERENCE_TOL`] `(|v_n^A| + |v_t^A|)`, which is known before the solution, all but
+/// the finiteness of `I_n` (which [`Factors::keep_in_range`](scale::Factors) implies):
+/// then, with a finite `I_n`, it passes them (and [`is_coherent`] is true) without the long
+/// chain of sums of the full tolerance after the solution; when it does not,
+/// [`is_coherent`] decides.
+///
+/// The full tolerance is a sum of non-negative terms that starts with
+/// `|v_n^A| + |v_t^A|`, rounded at each step, times a positive constant: rounding is
+/// monotone, so it is never below the least one, unless it is NaN; and it is NaN only
+/// where a product of `W` and `I` is not finite, which makes a residual of Eqs. (22)–(23)
+/// infinite or NaN, so that the checks fail with any tolerance. Every check that holds for
+/// a tolerance holds for a larger one.
+#[inline(always)]
+fn is_clearly_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
+    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
+    let tol = COHERENCE_TOL * (v_a.n.abs() + v_a.t.abs());
+    let wi = w.apply(i);
+    // The sign of v_t^S, as bounds: |v_t^S| ≤ tol, v_t^S ≥ −tol, v_t^S ≤ tol.
+    let (lo, hi) = match sol.kind {
+        CollisionType::Sticking => (-tol, tol),
+        CollisionType::ForwardSliding => (-tol, Real::INFINITY),
+        CollisionType::ReverseSliding => (Real::NEG_INFINITY, tol),
+    };
+    // I_n finite is left to `Factors::keep_in_range`, which bounds |I_n|.
+    (i.n > 0.0)
+        & (v_s.n >= -tol)
+        & ((v_s.n - v_a.n - wi.n).abs() <= tol)
+        & ((v_s.t - v_a.t - wi.t).abs() <= tol)
+        & (i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL))
+        & (lo <= v_s.t)
+        & (v_s.t <= hi)
+}
+
+/// The checks of [`check_coherence`] with the absolute tolerance `tol`.
+#[inline(always)]
+fn is_coherent_within(pb: &ImpactProblem, sol: &LawSolution, tol: Real) -> bool {
+    let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
+    let wi = w.apply(i);
     let sign_ok = match sol.kind {
         CollisionType::Sticking => v_s.t.abs() <= tol,
         CollisionType::ForwardSliding => v_s.t >= -tol,
         CollisionType::ReverseSliding => v_s.t <= tol,
     };
-    let ok = i.n > 0.0
-        && i.n.is_finite()
-        && v_s.n >= -tol
-        && (v_s.n - v_a.n - wi.n).abs() <= tol
-        && (v_s.t - v_a.t - wi.t).abs() <= tol
-        && i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL)
-        && sign_ok;
-    if ok {
-        Ok(())
-    } else {
-        Err(incoherence(law, pb, sol, tol))
-    }
+    (i.n > 0.0)
+        & i.n.is_finite()
+        & (v_s.n >= -tol)
+        & ((v_s.n - v_a.n - wi.n).abs() <= tol)
+        & ((v_s.t - v_a.t - wi.t).abs() <= tol)
+        & (i.t.abs() <= pb.mu * i.n * (1.0 + COHERENCE_TOL))
+        & sign_ok
 }
 
 /// The error naming the first coherence condition that failed (the slow path).

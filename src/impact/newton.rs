@@ -17,7 +17,7 @@ use crate::math::Real;
 ///
 /// On the boundary both sides give the same impulses [P, Comment a]; it is given to
 /// forward sliding (the slip stops exactly as the collision ends, `v_t^S = 0`).
-#[inline]
+#[inline(always)]
 pub fn collision_type(
     c: &Coefficients,
     case: SignCase,
@@ -51,7 +51,7 @@ pub fn collision_type(
 ///
 /// All three are derived again from Eqs. (22)–(23) and the phase conditions (46), (48),
 /// (51) in `tests/all/impact_laws.rs`, which checks Eqs. (22)–(23) on the result.
-#[inline]
+#[inline(always)]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
     let (e, mu) = (pb.e, pb.mu);
     let big_v = -pb.v_a.n;

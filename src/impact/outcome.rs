@@ -81,7 +81,7 @@ pub struct Outcome {
 ///
 /// Implements [P, Eq. (29)]:
 /// `ΔE = ½ I_n (v_n^S + v_n^A) + ½ I_t (v_t^S + v_t^A)`.
-#[inline]
+#[inline(always)]
 pub fn energy_change(i: Impulse, v_a: ContactVelocity, v_s: ContactVelocity) -> Real {
     0.5 * i.n * (v_s.n + v_a.n) + 0.5 * i.t * (v_s.t + v_a.t)
 }

@@ -39,7 +39,7 @@ impl Slope {
     /// The point reached from `p0` after the normal impulse `x` along this slope: the
     /// velocities are linear in `x`, the works quadratic,
     /// `W_n += v_n0 x + ½ dv_n x²`, `W_t += dĨ_t (v_t0 x + ½ dv_t x²)`.
-    #[inline]
+    #[inline(always)]
     fn advance(&self, p0: &PathPoint, x: Real) -> PathPoint {
         PathPoint {
             i: Impulse::new(p0.i.n + x, p0.i.t + self.di_t * x),
@@ -63,12 +63,13 @@ pub struct Phase {
 
 /// The phases of a collision, one or two, stored compactly: the end of each phase (the
 /// next one starts there; the first starts at the origin of the impulse plane, at the
-/// velocity of approach).
+/// velocity of approach). The end of the collision is always the second entry: a single
+/// phase is stored as two equal ends.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Phases {
     /// Velocity of approach: the contact velocity where the first phase starts (m/s).
     v_a: ContactVelocity,
-    /// The end of each phase.
+    /// The end of each phase (twice the end of a single phase).
     ends: [PathPoint; 2],
     /// The slip mode of each phase.
     kinds: [CollisionType; 2],
@@ -78,7 +79,7 @@ pub struct Phases {
 
 impl Phases {
     /// A single phase from the origin to `end`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn one(v_a: ContactVelocity, kind: CollisionType, end: PathPoint) -> Self {
         Self {
             v_a,
@@ -89,7 +90,7 @@ impl Phases {
     }
 
     /// Two phases: from the origin to `mid`, then to `end`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn two(
         v_a: ContactVelocity,
         first: CollisionType,
@@ -135,7 +136,7 @@ impl Phases {
     }
 
     /// The phases, in order.
-    #[inline]
+    #[inline(always)]
     pub fn iter(&self) -> impl Iterator<Item = Phase> + '_ {
         (0..self.len()).map(|k| Phase {
             kind: self.kinds[k],
@@ -152,24 +153,32 @@ impl Phases {
     }
 
     /// The end of the collision.
-    #[inline]
+    #[inline(always)]
     pub fn end(&self) -> &PathPoint {
-        &self.ends[self.len() - 1]
+        &self.ends[1]
+    }
+
+    /// The end of the first phase (of the collision, when there is one phase).
+    #[inline(always)]
+    pub(super) fn first_end(&self) -> &PathPoint {
+        &self.ends[0]
     }
 
     /// The same phases ending exactly at the impulse `i` and velocity `v` (a closed form's
     /// values, equal to the path's own end up to rounding).
-    #[inline]
+    #[inline(always)]
     pub(super) fn ending_at(mut self, i: Impulse, v: ContactVelocity) -> Self {
-        let k = self.len() - 1;
-        self.ends[k].i = i;
-        self.ends[k].v = v;
+        self.ends[1].i = i;
+        self.ends[1].v = v;
+        if self.len == 1 {
+            self.ends[0] = self.ends[1];
+        }
         self
     }
 
     /// The phases of the problem `(s W, c v^A)` from those of `(W, v^A)`, with the powers
     /// of two of [`Scale::exponents`](super::scale::Scale::exponents).
-    #[inline]
+    #[inline(always)]
     pub(super) fn scaled<R: Rescale>(mut self, k: &R) -> Self {
         self.v_a = ContactVelocity::new(k.velocity(self.v_a.n), k.velocity(self.v_a.t));
         for p in &mut self.ends {
@@ -183,8 +192,23 @@ impl Phases {
         self
     }
 
+    /// The phases with every point and the velocity of approach mapped by `point` and
+    /// `velocity` (a change of frame or of scales).
+    #[inline(always)]
+    pub(super) fn map(
+        self,
+        point: impl Fn(&PathPoint) -> PathPoint,
+        velocity: impl Fn(ContactVelocity) -> ContactVelocity,
+    ) -> Self {
+        Self {
+            v_a: velocity(self.v_a),
+            ends: [point(&self.ends[0]), point(&self.ends[1])],
+            ..self
+        }
+    }
+
     /// Mirrors the phases into the frame whose tangent is `−t`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn mirror(&mut self) {
         self.v_a.t = -self.v_a.t;
         for p in &mut self.ends {
@@ -230,7 +254,7 @@ impl RouthPath {
     }
 
     /// [`RouthPath::new`] with g, h, p, q already computed.
-    #[inline]
+    #[inline(always)]
     pub fn with_coefficients(
         w: &ImpactMatrix,
         mu: Real,
@@ -309,7 +333,7 @@ impl RouthPath {
 
     /// The slip mode of a collision that ends at the normal impulse `i_n`: forward
     /// sliding up to and including G, then the mode after G.
-    #[inline]
+    #[inline(always)]
     pub fn kind_at(&self, i_n: Real) -> CollisionType {
         if i_n <= self.i_g {
             CollisionType::ForwardSliding
@@ -319,7 +343,7 @@ impl RouthPath {
     }
 
     /// The point of the path at the normal impulse `i_n ≥ 0`.
-    #[inline]
+    #[inline(always)]
     pub fn at(&self, i_n: Real) -> PathPoint {
         if i_n <= self.i_g {
             let mut pt = self.slide.advance(&self.origin, i_n);
@@ -339,7 +363,7 @@ impl RouthPath {
     /// Phase 1: `Ĩ_n = (target − v_n^A)/h` if `h > 0` and this is before G; else
     /// phase 2: `Ĩ_n = Ĩ_n(G) + (target − v_n(G)) / (dv_n/dĨ_n)`.
     /// `None` if the path never gets there (impossible for positive definite `W`).
-    #[inline]
+    #[inline(always)]
     pub fn reach_normal_velocity(&self, target: Real) -> Option<Real> {
         if self.slide.dv_n > 0.0 {
             let x = (target - self.origin.v.n) / self.slide.dv_n;
@@ -359,7 +383,7 @@ impl RouthPath {
     ///
     /// On a phase starting at `v_n0` with slope `s`, the work after `x` is
     /// `v_n0 x + ½ s x² = R`, so `x = 2R / (v_n0 + √(v_n0² + 2 s R))` (the stable root).
-    #[inline]
+    #[inline(always)]
     pub fn reach_normal_work(&self, from: &PathPoint, work: Real) -> Option<Real> {
         let mut remaining = work;
         let (mut p0, mut slope, mut room) = if from.i.n < self.i_g {
@@ -382,7 +406,7 @@ impl RouthPath {
 
     /// The phases travelled until the normal impulse `i_n` (an empty first phase, when
     /// the slip is zero from the start, is left out).
-    #[inline]
+    #[inline(always)]
     pub fn phases_until(&self, i_n: Real) -> Phases {
         let end = self.at(i_n);
         let v_a = self.origin.v;
@@ -404,7 +428,7 @@ impl RouthPath {
 
 /// The root `x ≥ 0` of `v0 x + ½ s x² = r` for `r ≥ 0` on a rising branch, in the form
 /// without cancellation; `None` if there is none.
-#[inline]
+#[inline(always)]
 fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
     if r <= 0.0 {
         return Some(0.0);

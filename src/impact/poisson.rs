@@ -13,7 +13,7 @@ use super::{Failure, LawSolution};
 /// path (phase 1: `I_c = V/h` if `h > 0` and `V/h ≤ Ĩ_n(G)`; else
 /// `I_c = Ĩ_n(G) + (0 − v_n(G)) / (dv_n/dĨ_n)`), and the collision ends at
 /// `I_n = (1 + e) I_c`, where the path gives `I_t`, `v^S` and the type.
-#[inline]
+#[inline(always)]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
     let Some(i_c) = path.reach_normal_velocity(0.0) else {

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::scale::Scale;
+use super::scale::{Factors, Scale};
 use crate::math::Real;
 
 /// The 2×2 matrix `W = [[m_nn, m_nt], [m_nt, m_tt]]` of [P, Eq. (20)], mapping the
@@ -30,14 +30,14 @@ impl ImpactMatrix {
     }
 
     /// `Δ = m_nn m_tt − m_nt²` [P, Eq. (24)], positive for a positive definite `W`.
-    #[inline]
+    #[inline(always)]
     pub fn det(&self) -> Real {
         self.nn * self.tt - self.nt * self.nt
     }
 
     /// The velocity jump `W I` produced by the impulse `I` [P, Eqs. (22)–(23)]:
     /// `Δv_n = m_nn I_n + m_nt I_t`, `Δv_t = m_nt I_n + m_tt I_t`.
-    #[inline]
+    #[inline(always)]
     pub fn apply(&self, i: Impulse) -> ContactVelocity {
         ContactVelocity {
             n: self.nn * i.n + self.nt * i.t,
@@ -53,13 +53,13 @@ impl ImpactMatrix {
     /// it often has rank 1: a pendulum (p = 1), a ball on a vertical slide. Then the contact
     /// velocity moves along a line, `W` is positive *semi*definite, and the laws here are
     /// extended to it (see [`crate::impact`]).
-    #[inline]
+    #[inline(always)]
     pub fn is_singular(&self) -> bool {
         self.det() <= SINGULAR_RELATIVE_DET * self.nn * self.tt
     }
 
     /// The same matrix in the frame whose tangent is `−t`: `m_nt` changes sign.
-    #[inline]
+    #[inline(always)]
     pub fn mirrored(&self) -> Self {
         Self {
             nt: -self.nt,
@@ -221,6 +221,15 @@ fn power_of_ten(x: Real) -> String {
 /// working precision: the closed forms would divide by rounding noise.
 const SINGULAR_RELATIVE_DET: Real = 16.0 * Real::EPSILON;
 
+/// The largest `μ` that [`ImpactProblem::at_moderate_scale`] takes (exclusive): `2^500`.
+const MODERATE_FRICTION: Real = Real::from_bits((1023 + 500) << 52);
+
+/// `|x|` as its bit pattern, which orders like `|x|` (NaN above infinity).
+#[inline(always)]
+fn magnitude(x: Real) -> u64 {
+    x.to_bits() & !(1 << 63)
+}
+
 impl ImpactProblem {
     /// The problem from its four data.
     pub fn new(w: ImpactMatrix, v_a: ContactVelocity, e: Real, mu: Real) -> Self {
@@ -238,30 +247,27 @@ impl ImpactProblem {
     /// [`validate`](Self::validate), returning the powers of two of `W` and `v^A` it
     /// computes on the way and the problem brought to order one with them
     /// ([`Scale::down`]), which the solver solves.
-    #[inline]
+    #[inline(always)]
     pub(super) fn at_order_one(&self) -> Result<(Scale, ImpactProblem), ImpactError> {
-        let all_finite = self.w.nn.is_finite()
-            & self.w.nt.is_finite()
-            & self.w.tt.is_finite()
-            & self.v_a.n.is_finite()
-            & self.v_a.t.is_finite()
-            & self.e.is_finite()
-            & self.mu.is_finite();
-        if !all_finite {
+        // The magnitudes as bit patterns, which order like the numbers: the largest of all
+        // is infinite or NaN exactly when an input is not finite.
+        let (w, v) = (&self.w, self.v_a);
+        let w_max = magnitude(w.nn).max(magnitude(w.nt)).max(magnitude(w.tt));
+        let v_max = magnitude(v.n).max(magnitude(v.t));
+        let max = w_max
+            .max(v_max)
+            .max(magnitude(self.e))
+            .max(magnitude(self.mu));
+        if max >= Real::INFINITY.to_bits() {
             return Err(self.first_non_finite());
         }
-        let scale = Scale::of(&self.w, self.v_a);
+        let scale = Scale::of_magnitudes(w_max, v_max);
         let unit = scale.matrix_down(&self.w);
         if !(unit.nn > 0.0
             && unit.tt >= 0.0
             && unit.det() >= -SINGULAR_RELATIVE_DET * unit.nn * unit.tt)
         {
-            return Err(ImpactError::NotPositiveDefinite {
-                nn: self.w.nn,
-                nt: self.w.nt,
-                tt: self.w.tt,
-                det: self.w.det(),
-            });
+            return Err(self.not_positive_definite());
         }
         if self.v_a.n >= 0.0 {
             return Err(ImpactError::NotApproaching { vn: self.v_a.n });
@@ -273,6 +279,44 @@ impl ImpactProblem {
             return Err(ImpactError::NegativeFriction { mu: self.mu });
         }
         Ok((scale, scale.down(self, unit)))
+    }
+
+    /// [`at_order_one`](Self::at_order_one) for the usual problems: valid, with the
+    /// largest entries of `W` and `v^A` in `[2^-340, 2^341)` and `μ < 2^500`. Then every
+    /// power of two by which an answer scales (`c/s`, `c`, `c²/s`, `s`, `s²`) is a normal
+    /// double, and the powers of two come as [`Factors`]; and g, h, p, q, below `2^502` at
+    /// order one (the entries of `W` are below 2), stay below `2^842` at the caller's
+    /// scale. `None` for the others, invalid data included
+    /// ([`at_order_one`](Self::at_order_one) tells which error).
+    #[inline(always)]
+    pub(super) fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
+        // The exponents of the largest magnitudes, from their bits (0 and subnormals,
+        // infinities and NaN fall outside ±340).
+        let (w, v) = (&self.w, self.v_a);
+        let w_max = magnitude(w.nn).max(magnitude(w.nt)).max(magnitude(w.tt));
+        let v_max = magnitude(v.n).max(magnitude(v.t));
+        let scale = Scale::of_moderate_magnitudes(w_max, v_max)?;
+        let unit = scale.down_moderate(self);
+        let w = &unit.w;
+        let valid = (w.nn > 0.0)
+            & (w.tt >= 0.0)
+            & (w.det() >= -SINGULAR_RELATIVE_DET * w.nn * w.tt)
+            & (self.v_a.n < 0.0)
+            & (0.0..=1.0).contains(&self.e)
+            & (self.mu >= 0.0)
+            & (self.mu < MODERATE_FRICTION);
+        valid.then(|| (scale.factors(), unit))
+    }
+
+    /// The error of a `W` that is not positive semidefinite (the slow path of `validate`).
+    #[cold]
+    fn not_positive_definite(&self) -> ImpactError {
+        ImpactError::NotPositiveDefinite {
+            nn: self.w.nn,
+            nt: self.w.nt,
+            tt: self.w.tt,
+            det: self.w.det(),
+        }
     }
 
     /// The error naming the first non-finite input (the slow path of `validate`).

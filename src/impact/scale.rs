@@ -28,8 +28,11 @@
 //! ([`ImpactError::OutOfRange`]).
 
 use super::coefficients::Coefficients;
+use super::coefficients::SignCase;
 use super::outcome::Outcome;
-use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem};
+use super::path::PathPoint;
+use super::problem::{ContactVelocity, ImpactError, ImpactMatrix, ImpactProblem, Impulse};
+use super::{Law, LawSolution};
 use crate::math::Real;
 
 /// The powers of two `s = 2^w` and `c = 2^v` of a problem's `W` and `v^A`.
@@ -43,17 +46,60 @@ pub(super) struct Scale {
 
 impl Scale {
     /// The scales of `W` and `v^A`: the powers of two at or below their largest entries
-    /// (both nonzero for valid data: `m_nn > 0`, `v_n^A < 0`).
-    #[inline]
-    pub(super) fn of(w: &ImpactMatrix, v_a: ContactVelocity) -> Self {
+    /// (both nonzero for valid data: `m_nn > 0`, `v_n^A < 0`), given as the bit patterns
+    /// of the largest magnitudes `max |m_ij|` and `max |v_i^A|` (finite).
+    #[inline(always)]
+    pub(super) fn of_magnitudes(w_max: u64, v_max: u64) -> Self {
         Self {
-            w: exponent(w.nn.abs().max(w.nt.abs()).max(w.tt.abs())),
-            v: exponent(v_a.n.abs().max(v_a.t.abs())),
+            w: exponent_of_magnitude(w_max),
+            v: exponent_of_magnitude(v_max),
+        }
+    }
+
+    /// [`Scale::of_magnitudes`] when both powers of two lie in `[2^-340, 2^340]` (biased
+    /// exponents within `1023 ± 340`).
+    #[inline(always)]
+    pub(super) fn of_moderate_magnitudes(w_max: u64, v_max: u64) -> Option<Self> {
+        let biased = |bits: u64| (bits >> 52) as u32;
+        let moderate = |bits: u64| biased(bits).wrapping_sub(1023 - MODERATE) <= 2 * MODERATE;
+        (moderate(w_max) & moderate(v_max)).then(|| Self {
+            w: biased(w_max) as i32 - 1023,
+            v: biased(v_max) as i32 - 1023,
+        })
+    }
+
+    /// [`Scale::down`] of [`Scale::matrix_down`] at moderate scales: the same products by
+    /// `2^-log2 s` and `2^-log2 c` (normal doubles), without [`ldexp`]'s test of the range.
+    #[inline(always)]
+    pub(super) fn down_moderate(&self, pb: &ImpactProblem) -> ImpactProblem {
+        let (s, c) = (pow2(-self.w), pow2(-self.v));
+        let w = &pb.w;
+        ImpactProblem {
+            w: ImpactMatrix::new(w.nn * s, w.nt * s, w.tt * s),
+            v_a: ContactVelocity::new(pb.v_a.n * c, pb.v_a.t * c),
+            ..*pb
+        }
+    }
+
+    /// The powers of two of [`exponents`](Scale::exponents) as numbers, for moderate
+    /// scales ([`Scale::of_moderate_magnitudes`]), whose exponents are those of normal
+    /// doubles.
+    #[inline(always)]
+    pub(super) fn factors(&self) -> Factors {
+        let k = self.exponents();
+        debug_assert!(self.w.unsigned_abs() <= MODERATE && self.v.unsigned_abs() <= MODERATE);
+        Factors {
+            impulse: pow2(k.impulse),
+            velocity: pow2(k.velocity),
+            work: pow2(k.work),
+            coefficient: pow2(k.coefficient),
+            det: pow2(k.det),
+            limit: pow2(1023 - k.impulse.max(k.work).max(0)),
         }
     }
 
     /// `W / s`, whose largest entry lies in `[1, 2)`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn matrix_down(&self, w: &ImpactMatrix) -> ImpactMatrix {
         ImpactMatrix::new(
             ldexp(w.nn, -self.w),
@@ -64,7 +110,7 @@ impl Scale {
 
     /// The problem `(W/s, v^A/c, e, μ)`, with `w = W/s` already computed
     /// ([`Scale::matrix_down`]).
-    #[inline]
+    #[inline(always)]
     pub(super) fn down(&self, pb: &ImpactProblem, w: ImpactMatrix) -> ImpactProblem {
         ImpactProblem {
             w,
@@ -114,7 +160,7 @@ impl Scale {
 
     /// The powers of two of an impulse, a velocity, a work, a coefficient g, h, p, q and
     /// `Δ`, in this order (see the module's table).
-    #[inline]
+    #[inline(always)]
     pub(super) fn exponents(&self) -> Exponents {
         Exponents {
             impulse: self.v - self.w,
@@ -126,50 +172,8 @@ impl Scale {
     }
 
     /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
-    /// caller's scales in place, when every power of two of
-    /// [`exponents`](Scale::exponents) is that of a normal double and every number the
-    /// answer reports stays in the range of doubles: each kind of quantity is multiplied by
-    /// its power of two, which is exact and equal, bit for bit, to [`Scale::up`]'s
-    /// [`ldexp`]. Returns false otherwise, and `out` then means nothing: [`Scale::up`] on
-    /// the outcome at order one gives the answer or the error.
-    #[inline]
-    pub(super) fn up_in_place(&self, out: &mut Outcome) -> bool {
-        let Some(f) = self.exponents().factors() else {
-            return false;
-        };
-        let i_n = out.impulse.n;
-        out.impulse.n = f.impulse(out.impulse.n);
-        out.impulse.t = f.impulse(out.impulse.t);
-        out.v_s = ContactVelocity::new(f.velocity(out.v_s.n), f.velocity(out.v_s.t));
-        out.delta_e = f.work(out.delta_e);
-        out.work_n = f.work(out.work_n);
-        out.work_t = f.work(out.work_t);
-        out.coefficients = out.coefficients.scaled(&f);
-        out.phases = out.phases.scaled(&f);
-        // The numbers `beyond_range` checks.
-        let c = &out.coefficients;
-        let mut finite = out.impulse.n.is_finite()
-            & out.impulse.t.is_finite()
-            & out.delta_e.is_finite()
-            & out.work_n.is_finite()
-            & out.work_t.is_finite()
-            & c.g.is_finite()
-            & c.h.is_finite()
-            & c.p.is_finite()
-            & c.q.is_finite();
-        for ph in out.phases.iter() {
-            let end = ph.end;
-            finite &= end.i.n.is_finite()
-                & end.i.t.is_finite()
-                & end.work_n.is_finite()
-                & end.work_t.is_finite();
-        }
-        finite && !(i_n > 0.0 && out.impulse.n == 0.0)
-    }
-
-    /// The outcome of the problem scaled down by [`Scale::down`], brought back to the
     /// caller's scales; an error if a number of it is beyond the range of doubles. (The
-    /// general path, for the answers [`Scale::up_in_place`] does not take.)
+    /// general path; [`Factors::outcome`] is the usual one.)
     #[inline(never)]
     pub(super) fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
         let k = self.exponents();
@@ -208,30 +212,30 @@ pub(super) trait Rescale {
 }
 
 impl Rescale for Exponents {
-    #[inline]
+    #[inline(always)]
     fn impulse(&self, x: Real) -> Real {
         ldexp(x, self.impulse)
     }
-    #[inline]
+    #[inline(always)]
     fn velocity(&self, x: Real) -> Real {
         ldexp(x, self.velocity)
     }
-    #[inline]
+    #[inline(always)]
     fn work(&self, x: Real) -> Real {
         ldexp(x, self.work)
     }
-    #[inline]
+    #[inline(always)]
     fn coefficient(&self, x: Real) -> Real {
         ldexp(x, self.coefficient)
     }
-    #[inline]
+    #[inline(always)]
     fn det(&self, x: Real) -> Real {
         ldexp(x, self.det)
     }
 }
 
-/// The powers of two of [`Exponents`] as numbers, when each is a normal double: a
-/// product by one of them is exact unless it over- or underflows, and equals [`ldexp`].
+/// The powers of two of [`Exponents`] as numbers, each a normal double: a product by one
+/// of them is exact unless it over- or underflows, and equals [`ldexp`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Factors {
     impulse: Real,
@@ -239,28 +243,102 @@ pub(super) struct Factors {
     work: Real,
     coefficient: Real,
     det: Real,
+    /// `2^(1023 − k)` for the largest `k ≥ 0` of the impulses and the works: a number of
+    /// these kinds below it at order one stays below `2^1023` once scaled.
+    limit: Real,
 }
 
 impl Rescale for Factors {
-    #[inline]
+    #[inline(always)]
     fn impulse(&self, x: Real) -> Real {
         x * self.impulse
     }
-    #[inline]
+    #[inline(always)]
     fn velocity(&self, x: Real) -> Real {
         x * self.velocity
     }
-    #[inline]
+    #[inline(always)]
     fn work(&self, x: Real) -> Real {
         x * self.work
     }
-    #[inline]
+    #[inline(always)]
     fn coefficient(&self, x: Real) -> Real {
         x * self.coefficient
     }
-    #[inline]
+    #[inline(always)]
     fn det(&self, x: Real) -> Real {
         x * self.det
+    }
+}
+
+impl Factors {
+    /// The outcome in the caller's frame and scales of a law's solution `sol` in the
+    /// paper's frame at order one, with its `ΔE`: the tangential components change sign
+    /// where `t` was mirrored (Eq. 10), and each kind of quantity is multiplied by its
+    /// power of two. A product by `±2^k` is exact, and the same number as the mirrored
+    /// component times `2^k`: bit for bit [`Scale::up`] (with its [`ldexp`]) of the
+    /// mirrored solution, where [`keep_in_range`](Self::keep_in_range) holds.
+    #[inline(always)]
+    pub(super) fn outcome(
+        &self,
+        law: Law,
+        case: SignCase,
+        c: &Coefficients,
+        sol: &LawSolution,
+        delta_e: Real,
+        mirrored: bool,
+    ) -> Outcome {
+        let sign = if mirrored { -1.0 } else { 1.0 };
+        let (impulse_t, velocity_t) = (sign * self.impulse, sign * self.velocity);
+        let impulse = |i: Impulse| Impulse::new(self.impulse(i.n), i.t * impulse_t);
+        let velocity =
+            |v: ContactVelocity| ContactVelocity::new(self.velocity(v.n), v.t * velocity_t);
+        let point = |p: &PathPoint| PathPoint {
+            i: impulse(p.i),
+            v: velocity(p.v),
+            work_n: self.work(p.work_n),
+            work_t: self.work(p.work_t),
+        };
+        let end = sol.phases.end();
+        Outcome {
+            law,
+            kind: sol.kind,
+            case,
+            coefficients: c.scaled(self),
+            impulse: impulse(sol.impulse),
+            v_s: velocity(sol.v_s),
+            phases: sol.phases.map(point, velocity),
+            delta_e: self.work(delta_e),
+            work_n: self.work(end.work_n),
+            work_t: self.work(end.work_t),
+            mirrored,
+        }
+    }
+
+    /// Whether [`outcome`](Self::outcome) keeps the solution `sol` at order one, of a
+    /// problem from [`ImpactProblem::at_moderate_scale`], in the range of doubles where
+    /// [`Scale::up`] checks it (`beyond_range`): the numbers it checks stay finite, and
+    /// `I_n > 0` does not become 0. The impulses and works are compared at order one with
+    /// `limit`, so that the check does not wait for the products (their magnitudes are
+    /// the same in either frame); g, h, p, q stay finite at moderate scales.
+    #[inline(always)]
+    pub(super) fn keep_in_range(&self, sol: &LawSolution, delta_e: Real) -> bool {
+        // The last phase ends at the impulse with the works, so the end of the first phase
+        // stands for the phases.
+        let i = sol.impulse;
+        let (end, first) = (sol.phases.end(), sol.phases.first_end());
+        debug_assert!(end.i == i, "the phase ends at I");
+        let small = |x: Real| x.abs() < self.limit;
+        let finite = small(i.n)
+            & small(i.t)
+            & small(delta_e)
+            & small(end.work_n)
+            & small(end.work_t)
+            & small(first.i.n)
+            & small(first.i.t)
+            & small(first.work_n)
+            & small(first.work_t);
+        finite && !(i.n > 0.0 && self.impulse(i.n) == 0.0)
     }
 }
 
@@ -277,27 +355,6 @@ pub(super) struct Exponents {
     pub(super) coefficient: i32,
     /// `Δ`: `s²`.
     pub(super) det: i32,
-}
-
-impl Exponents {
-    /// The factors `2^k`, if every `k` is the exponent of a normal double
-    /// (`−1022 ≤ k ≤ 1023`).
-    #[inline]
-    fn factors(&self) -> Option<Factors> {
-        let normal = |k: i32| (-1022..=1023).contains(&k);
-        (normal(self.impulse)
-            & normal(self.velocity)
-            & normal(self.work)
-            & normal(self.coefficient)
-            & normal(self.det))
-        .then(|| Factors {
-            impulse: pow2(self.impulse),
-            velocity: pow2(self.velocity),
-            work: pow2(self.work),
-            coefficient: pow2(self.coefficient),
-            det: pow2(self.det),
-        })
-    }
 }
 
 /// The first number of an outcome at order one that the powers of two `k` take beyond
@@ -336,9 +393,14 @@ fn beyond_range(out: &Outcome, k: &Exponents) -> Option<(&'static str, Real, i32
     overflow.or_else(underflow)
 }
 
+/// The largest `|log2 s|` and `|log2 c|` of the scales that [`solve`](super::solve) takes
+/// in one pass: every power of two of [`Scale::exponents`] (at most `3 · 340 = 1020` in
+/// magnitude, for the works' `c²/s`) is then that of a normal double.
+const MODERATE: u32 = 340;
+
 /// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
 /// for 0 and non-finite `x`.
-#[inline]
+#[inline(always)]
 pub(crate) fn exponent(x: Real) -> i32 {
     if x == 0.0 || !x.is_finite() {
         return 0;
@@ -352,9 +414,28 @@ pub(crate) fn exponent(x: Real) -> i32 {
     }
 }
 
+/// [`exponent`] of the finite number `|x| ≥ 0` given by its bits: the biased exponent field
+/// of a normal number, less its bias.
+#[inline(always)]
+fn exponent_of_magnitude(bits: u64) -> i32 {
+    let biased = (bits >> 52) as i32;
+    if biased == 0 {
+        exponent_of_subnormal(Real::from_bits(bits))
+    } else {
+        biased - 1023
+    }
+}
+
+/// [`exponent`] of 0 or a subnormal number (the slow path).
+#[cold]
+#[inline(never)]
+fn exponent_of_subnormal(x: Real) -> i32 {
+    exponent(x)
+}
+
 /// `x · 2^k`, exact unless the result is subnormal (then rounded, at most twice) or beyond
 /// the range of doubles (then infinite).
-#[inline]
+#[inline(always)]
 pub(crate) fn ldexp(x: Real, k: i32) -> Real {
     if (-1022..=1023).contains(&k) {
         x * pow2(k)
@@ -378,7 +459,7 @@ fn ldexp_far(mut x: Real, mut k: i32) -> Real {
 }
 
 /// `2^k` for `k ∈ [−1022, 1023]`, from its bits.
-#[inline]
+#[inline(always)]
 fn pow2(k: i32) -> Real {
     debug_assert!((-1022..=1023).contains(&k));
     Real::from_bits(((k + 1023) as u64) << 52)
@@ -387,15 +468,18 @@ fn pow2(k: i32) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::impact::{Law, solve_at_order_one};
+    use crate::impact::{
+        Law, apply, energy_change, is_clearly_coherent, paper_frame, solve_at_order_one,
+    };
 
-    /// The in-place path of [`Scale::up_in_place`] (a product by each power of two) gives
-    /// the general path's answer ([`ldexp`] after [`beyond_range`]) bit for bit, and
-    /// declines only where the general path fails or a power of two is beyond the
-    /// exponents of the normal doubles. Random problems over the whole range of scales
+    /// The one pass of [`solve`](crate::impact::solve) (the law at order one, then a
+    /// product by each power of two, [`Factors::outcome`]) gives the general path's answer
+    /// ([`solve_at_order_one`], then [`ldexp`] after [`beyond_range`]) bit for bit, and
+    /// declines, beyond the general path's errors and the scales beyond `2^±340`, less
+    /// than once in a thousand. Random problems over the whole range of scales
     /// (`W = L Lᵀ`, singular one time in seven), every law.
     #[test]
-    fn in_place_scaling_is_the_general_path() {
+    fn one_pass_is_the_general_path() {
         let mut state: u64 = 0x2545_F491_4F6C_DD1D;
         let mut rnd = move || {
             state ^= state << 13;
@@ -403,7 +487,21 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as Real / (1u64 << 53) as Real
         };
-        let (mut in_place, mut declined, mut errors) = (0, 0, 0);
+        let one_pass = |law: Law, pb: &ImpactProblem| {
+            let (f, unit) = pb.at_moderate_scale()?;
+            assert_eq!(Ok(unit), pb.at_order_one().map(|(_, unit)| unit));
+            let (pb, mirrored) = paper_frame(&unit);
+            let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
+            let case = c.sign_case();
+            let sol = apply(law, &pb, &c, case);
+            let delta_e = energy_change(sol.impulse, pb.v_a, sol.v_s);
+            if sol.failure.is_some() || !is_clearly_coherent(&pb, &sol) {
+                return None;
+            }
+            (f.keep_in_range(&sol, delta_e))
+                .then(|| f.outcome(law, case, &c, &sol, delta_e, mirrored))
+        };
+        let (mut in_place, mut declined, mut errors, mut needless) = (0, 0, 0, 0);
         for k in 0..20_000 {
             let far = |r: Real| pow2((r * 2000.0 - 1000.0) as i32);
             let s = if k % 4 == 0 {
@@ -426,11 +524,11 @@ mod tests {
             };
             for law in Law::ALL {
                 let Ok(out) = solve_at_order_one(law, &unit) else {
+                    assert_eq!(one_pass(law, &pb), None);
                     continue;
                 };
                 let general = scale.up(out);
-                let mut fast = out;
-                if scale.up_in_place(&mut fast) {
+                if let Some(fast) = one_pass(law, &pb) {
                     in_place += 1;
                     // Debug prints every double exactly (and −0 apart from 0).
                     assert_eq!(
@@ -438,27 +536,29 @@ mod tests {
                         format!("{:?}", Ok::<_, ImpactError>(fast))
                     );
                 } else {
+                    // Declined: extreme scales, an error of the general path, or (rarely)
+                    // a solution not clearly coherent or near the range's limit.
                     declined += 1;
-                    let beyond_normal = scale.exponents().factors().is_none();
+                    let beyond_moderate = pb.at_moderate_scale().is_none();
                     errors += usize::from(general.is_err());
-                    assert!(general.is_err() || beyond_normal, "{pb:?}: {general:?}");
+                    needless += usize::from(general.is_ok() && !beyond_moderate);
                 }
             }
         }
         assert!(in_place > 40_000, "{in_place}");
         assert!(errors > 100 && declined > errors, "{declined} {errors}");
+        assert!(needless * 1000 < in_place, "{needless} of {in_place}");
 
-        // I_n > 0 that the in-place path brings to 0 while its powers of two are normal:
-        // W ≈ 2^511, v_t^A = 2^-255, v_n^A = −2^-575 (I_n ≈ 2^-320 · 2^-766 at order one).
-        let w = ImpactMatrix::new(pow2(511), pow2(508), pow2(511));
-        let pb = ImpactProblem::new(w, ContactVelocity::new(-pow2(-575), pow2(-255)), 0.5, 0.3);
+        // I_n > 0 that the one pass brings to 0 while its scales are moderate:
+        // W ≈ 2^340, v_t^A = 2^-340, v_n^A = −2^-740 (I_n ≈ 2^-400 · 2^-680 at order one).
+        let w = ImpactMatrix::new(pow2(340), pow2(337), pow2(340));
+        let pb = ImpactProblem::new(w, ContactVelocity::new(-pow2(-740), pow2(-340)), 0.5, 0.3);
         let (scale, unit) = pb.at_order_one().unwrap();
-        assert!(scale.exponents().factors().is_some());
+        assert!(pb.at_moderate_scale().is_some());
         for law in Law::ALL {
             let out = solve_at_order_one(law, &unit).unwrap();
             assert!(out.impulse.n > 0.0);
-            let mut fast = out;
-            assert!(!scale.up_in_place(&mut fast), "{law}");
+            assert_eq!(one_pass(law, &pb), None, "{law}");
             assert!(
                 matches!(
                     scale.up(out),

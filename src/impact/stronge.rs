@@ -14,7 +14,7 @@ use super::{Failure, LawSolution};
 /// collision ends at the `I_n > I_c` with `∫_{I_c}^{I_n} v_n dĨ_n = −e² W_c`. On each
 /// phase `v_n = v_n0 + s x` is linear in the normal impulse `x` since the phase began, so
 /// the restitution work is `v_n0 x + ½ s x²`: a quadratic, solved phase by phase.
-#[inline]
+#[inline(always)]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
     let Some(i_c) = path.reach_normal_velocity(0.0) else {
