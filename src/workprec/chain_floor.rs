@@ -120,10 +120,29 @@ pub struct FloorSettings {
     pub budget: Real,
 }
 
+/// CPU time of the calling thread (s), from Linux's `/proc/thread-self/schedstat` (its
+/// first field, ns on the CPU); `None` elsewhere. On a machine shared with other jobs the
+/// wall time of a run grows with the load, its CPU time much less.
+pub fn thread_cpu_s() -> Option<Real> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns as Real * 1e-9)
+}
+
+/// The load average of the last minute (Linux's `/proc/loadavg`); `None` elsewhere.
+pub fn load_average() -> Option<Real> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    text.split_whitespace().next()?.parse().ok()
+}
+
 /// Hears the run: the clock at the first impact, and at every impact and mode change
 /// after it; the mode of every pair that changed one. Takes no samples.
 struct Clock<'a> {
     start: Instant,
+    /// The thread's CPU time at the start (s).
+    cpu_start: Option<Real>,
+    /// The CPU time from the start to the first impact (s).
+    cpu_first: Option<Real>,
     /// Set at the first impact (run 1 stops there).
     stop_at_first: Option<&'a AtomicBool>,
     /// `(t, wall)` of the first impact (s, s since the start).
@@ -144,6 +163,8 @@ impl<'a> Clock<'a> {
     fn new(stop_at_first: Option<&'a AtomicBool>) -> Self {
         Self {
             start: Instant::now(),
+            cpu_start: None,
+            cpu_first: None,
             stop_at_first,
             first: None,
             readings: Vec::new(),
@@ -153,6 +174,11 @@ impl<'a> Clock<'a> {
             modes: BTreeMap::new(),
             max_closed: 0,
         }
+    }
+
+    /// CPU time since the start (s).
+    fn cpu(&self) -> Option<Real> {
+        Some(thread_cpu_s()? - self.cpu_start?)
     }
 
     fn read(&mut self, t: Real) {
@@ -178,6 +204,7 @@ impl Observer for Clock<'_> {
     fn impact(&mut self, _: &Model, impact: &ImpactEvent) -> Result<(), ObserverError> {
         if self.first.is_none() {
             self.first = Some((impact.t, self.start.elapsed().as_secs_f64()));
+            self.cpu_first = self.cpu();
             if let Some(flag) = self.stop_at_first {
                 flag.store(true, Ordering::Relaxed);
             }
@@ -203,14 +230,15 @@ impl Observer for Clock<'_> {
 }
 
 /// One run of `scene` to `t_end` (s), interrupted when `flag` is set (by the observer or
-/// by the budget's watchdog, after `budget` s of wall time); the summary and its wall time.
+/// by the budget's watchdog, after `budget` s of wall time); the summary, its wall time
+/// and its CPU time (s).
 fn run(
     scene: &Scene,
     t_end: Real,
     clock: &mut Clock<'_>,
     flag: &AtomicBool,
     budget: Real,
-) -> Result<(RunSummary, Real), WorkprecError> {
+) -> Result<(RunSummary, Real, Option<Real>), WorkprecError> {
     let mut settings = scene.settings.clone();
     settings.t_end = t_end;
     settings.output_rate = 0.0;
@@ -231,11 +259,12 @@ fn run(
             }
         });
         clock.start = Instant::now();
+        clock.cpu_start = thread_cpu_s();
         let summary = sim.run(&scene.initial, clock, Some(flag));
         drop(done);
         summary
     });
-    Ok((summary, clock.start.elapsed().as_secs_f64()))
+    Ok((summary, clock.start.elapsed().as_secs_f64(), clock.cpu()))
 }
 
 /// The closed points at the end of a run: the points within the closed-contact tolerance
@@ -262,11 +291,12 @@ pub fn measure(
     readings: &mut Vec<(Real, Real)>,
 ) -> Result<FloorRow, WorkprecError> {
     let scene = scene(links)?;
+    let load = load_average();
     let gap_tol = crate::sim::Scales::of(&scene.model, &scene.settings.integrator).gap_tol;
     // Run 1: to the first impact (a rope that never lands stops at the scene's end time).
     let flag = AtomicBool::new(false);
     let mut clock = Clock::new(Some(&flag));
-    let (fall, fall_wall) = run(
+    let (fall, fall_wall, fall_cpu) = run(
         &scene,
         scene.settings.t_end,
         &mut clock,
@@ -275,13 +305,18 @@ pub fn measure(
     )?;
     let Some((t1, _)) = clock.first else {
         return Ok(FloorRow::without_impact(
-            links, &scene, settings, &fall, fall_wall,
+            links,
+            &scene,
+            settings,
+            &fall,
+            (fall_wall, fall_cpu),
+            load,
         ));
     };
     // Run 2: through the window, under the budget.
     let flag = AtomicBool::new(false);
     let mut clock = Clock::new(None);
-    let (through, wall) = run(
+    let (through, wall, cpu) = run(
         &scene,
         t1 + settings.window,
         &mut clock,
@@ -301,6 +336,7 @@ pub fn measure(
     let (c, c1) = (through.counters, fall.counters);
     let window_reached = (t_reached - t1).max(0.0);
     let window_wall = wall - wall1;
+    let window_cpu = cpu.zip(clock.cpu_first).map(|(c, c1)| c - c1);
     Ok(FloorRow {
         links: links as u32,
         pairs: scene.model.pair_count() as u32,
@@ -309,12 +345,15 @@ pub fn measure(
         t_first_impact: Some(t1),
         free_fall_wall_s: fall_wall,
         free_fall_wall_per_sim_s: fall_wall / t1,
+        free_fall_cpu_s: fall_cpu,
         free_fall_steps: c1.steps,
         t_reached,
         window_reached_s: window_reached,
         wall_s: wall,
         window_wall_s: window_wall,
         wall_per_sim_s: window_wall / window_reached,
+        window_cpu_s: window_cpu,
+        cpu_per_sim_s: window_cpu.map(|c| c / window_reached),
         common_window_s: None,
         common_wall_per_sim_s: None,
         steps: c.steps.saturating_sub(c1.steps),
@@ -328,6 +367,7 @@ pub fn measure(
         max_closed_pairs: clock.max_closed as u32,
         budget_limited: matches!(through.stop, StopReason::Interrupted { .. }),
         stop: stop_text(&through.stop),
+        load_before: load,
     })
 }
 
@@ -346,7 +386,8 @@ impl FloorRow {
         scene: &Scene,
         settings: FloorSettings,
         fall: &RunSummary,
-        fall_wall: Real,
+        (fall_wall, fall_cpu): (Real, Option<Real>),
+        load: Option<Real>,
     ) -> FloorRow {
         let t = fall.state.t;
         FloorRow {
@@ -357,12 +398,15 @@ impl FloorRow {
             t_first_impact: None,
             free_fall_wall_s: fall_wall,
             free_fall_wall_per_sim_s: fall_wall / t,
+            free_fall_cpu_s: fall_cpu,
             free_fall_steps: fall.counters.steps,
             t_reached: t,
             window_reached_s: 0.0,
             wall_s: fall_wall,
             window_wall_s: 0.0,
             wall_per_sim_s: Real::NAN,
+            window_cpu_s: None,
+            cpu_per_sim_s: None,
             common_window_s: None,
             common_wall_per_sim_s: None,
             steps: 0,
@@ -376,6 +420,7 @@ impl FloorRow {
             max_closed_pairs: 0,
             budget_limited: matches!(fall.stop, StopReason::Interrupted { .. }),
             stop: stop_text(&fall.stop),
+            load_before: load,
         }
     }
 }

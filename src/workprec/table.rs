@@ -109,6 +109,8 @@ pub struct FloorRow {
     pub free_fall_wall_s: Real,
     /// Its wall time per simulated second.
     pub free_fall_wall_per_sim_s: Real,
+    /// Its CPU time (s; the simulating thread's, empty where it cannot be read).
+    pub free_fall_cpu_s: Option<Real>,
     /// Accepted steps of the free fall.
     pub free_fall_steps: u64,
     /// Simulated time reached by the run through the window (s).
@@ -121,6 +123,10 @@ pub struct FloorRow {
     pub window_wall_s: Real,
     /// Cost per simulated second: `window_wall_s / window_reached_s`.
     pub wall_per_sim_s: Real,
+    /// CPU time spent in the window (s; empty where it cannot be read).
+    pub window_cpu_s: Option<Real>,
+    /// CPU time per simulated second: `window_cpu_s / window_reached_s`.
+    pub cpu_per_sim_s: Option<Real>,
     /// The shortest window reached by any row of the table (s; empty if none).
     pub common_window_s: Option<Real>,
     /// The cost per simulated second over that shortest window.
@@ -147,6 +153,9 @@ pub struct FloorRow {
     pub budget_limited: bool,
     /// Why the run stopped: `t_end`, `budget` or `error`.
     pub stop: String,
+    /// The machine's load average (1 min) before the size's runs (empty where it cannot be
+    /// read): the wall times grow with it on a shared machine, the CPU times much less.
+    pub load_before: Option<Real>,
 }
 
 /// Writes `rows` to `path` as CSV with a header.

@@ -320,6 +320,11 @@ mod chain_floor {
         assert!(row.impact_instants <= row.impacts);
         assert!(row.window_wall_s > 0.0 && row.window_wall_s < row.wall_s);
         assert!((row.wall_per_sim_s - row.window_wall_s / 0.5).abs() < 1e-12);
+        // The thread's CPU time, where Linux gives it: at most the wall time (and the
+        // scheduler's tick of rounding).
+        if let Some(cpu) = row.window_cpu_s {
+            assert!(cpu > 0.0 && cpu <= row.window_wall_s + 1e-2, "{cpu}");
+        }
         assert!(row.closed_points_end >= row.closed_pairs_end);
         assert!(row.max_closed_pairs >= row.closed_pairs_end);
         // The readings start at the first impact and end at the end of the window.
@@ -404,12 +409,15 @@ mod chain_floor {
             t_first_impact: Some(0.4479),
             free_fall_wall_s: 0.184,
             free_fall_wall_per_sim_s: 0.411,
+            free_fall_cpu_s: Some(0.18),
             free_fall_steps: 1540,
             t_reached: 0.9479,
             window_reached_s: 0.5,
             wall_s: 2.58,
             window_wall_s: 2.398,
             wall_per_sim_s: 4.796,
+            window_cpu_s: Some(2.2),
+            cpu_per_sim_s: Some(4.4),
             common_window_s: None,
             common_wall_per_sim_s: None,
             steps: 2000,
@@ -423,6 +431,7 @@ mod chain_floor {
             max_closed_pairs: 22,
             budget_limited: false,
             stop: "t_end".into(),
+            load_before: Some(2.37),
         }
     }
 
@@ -437,6 +446,8 @@ mod chain_floor {
             FloorRow {
                 t_first_impact: None,
                 wall_per_sim_s: Real::NAN,
+                window_cpu_s: None,
+                cpu_per_sim_s: None,
                 budget_limited: true,
                 stop: "budget".into(),
                 ..sample_row(256)

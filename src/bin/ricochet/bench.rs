@@ -63,7 +63,7 @@ pub struct Args {
     floor_window: Real,
     /// Wall-time budget of each size's run through the window (s): a run that exhausts it
     /// stops there and its row says how far it got.
-    #[arg(long, default_value_t = 900.0)]
+    #[arg(long, default_value_t = 1800.0)]
     floor_budget: Real,
 }
 
@@ -598,9 +598,10 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
         let row = chain_floor::measure(links, settings, &mut r)?;
         println!(
             "  {:>3} links: first impact at {} s after {:.3e} s of wall ({} steps); window \
-             reached {:.4} s of {} in {:.3e} s of wall: {:.3e} wall s per simulated s{}; \
-             {} steps ({} rejected), {} rhs, {} events, {} impacts at {} instants; closed at \
-             the end {} pairs, {} points (most pairs at once {}); {}",
+             reached {:.4} s of {} in {:.3e} s of wall: {:.3e} wall s ({} CPU s) per \
+             simulated s{}; {} steps ({} rejected), {} rhs, {} events, {} impacts at {} \
+             instants; closed at the end {} pairs, {} points (most pairs at once {}); {}; load \
+             before {}",
             row.links,
             row.t_first_impact
                 .map_or("(none)".into(), |t| format!("{t:.4}")),
@@ -610,6 +611,7 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
             row.window_s,
             row.window_wall_s,
             row.wall_per_sim_s,
+            row.cpu_per_sim_s.map_or("?".into(), |c| format!("{c:.3e}")),
             if row.budget_limited {
                 " (budget-limited)"
             } else {
@@ -624,7 +626,8 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
             row.closed_pairs_end,
             row.closed_points_end,
             row.max_closed_pairs,
-            row.stop
+            row.stop,
+            row.load_before.map_or("?".into(), |l| l.to_string())
         );
         rows.push(row);
         readings.push(r);
