@@ -63,8 +63,12 @@ pub struct Args {
     floor_window: Real,
     /// Wall-time budget of each size's run through the window (s): a run that exhausts it
     /// stops there and its row says how far it got.
-    #[arg(long, default_value_t = 1800.0)]
+    #[arg(long, default_value_t = 1200.0)]
     floor_budget: Real,
+    /// Redraw `chain_floor_scaling.svg` and print the fits from the floor part's CSV in
+    /// `--out`, without measuring (MACHINE.txt unchanged).
+    #[arg(long)]
+    floor_redraw: bool,
 }
 
 /// A scene of the work-precision part: its file, end time, the impacts compared, and how
@@ -184,13 +188,23 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         chain_scaling(&scenes_dir, &args, &mut notes)?;
     }
     let mut floor_notes = None;
-    if args.floor {
+    if args.floor_redraw {
+        let csv = args.out.join("chain_floor.csv");
+        let rows: Vec<FloorRow> = table::read(&csv)?;
+        for line in floor_summary(&rows) {
+            println!("  {line}");
+        }
+        floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
+        println!("redrew chain_floor_scaling.svg from {}", csv.display());
+    } else if args.floor {
         let mut lines = String::new();
         floor_scaling(&args, &mut lines)?;
         floor_notes = Some(lines);
     }
     let main_notes = (!(args.no_workprec && args.no_chain)).then_some(notes.as_str());
-    machine(&args.out, main_notes, floor_notes.as_deref())?;
+    if main_notes.is_some() || floor_notes.is_some() {
+        machine(&args.out, main_notes, floor_notes.as_deref())?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -640,8 +654,11 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
         println!("  {line}");
         let _ = writeln!(notes, "{line}");
     }
-    floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows, settings)?;
-    println!("wrote {} and chain_floor_scaling.svg", csv.display());
+    floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
+    println!(
+        "wrote {}, chain_floor_scaling.svg and chain_floor_per_step.svg",
+        csv.display()
+    );
     Ok(())
 }
 
@@ -653,9 +670,33 @@ fn complete_points(rows: &[FloorRow]) -> Vec<(Real, Real)> {
         .collect()
 }
 
+/// One size's figures in a line: the window's cost, its steps, the cost of a step.
+fn floor_line(r: &FloorRow) -> String {
+    format!(
+        "chain_floor {:>3} links: {:.4} s of the {} s window{} in {:.3e} s wall, {} CPU s: \
+         {:.3e} wall s per simulated s, {:.3e} steps per simulated s, {:.3e} wall s per \
+         step; {} impacts; {} closed points at the end",
+        r.links,
+        r.window_reached_s,
+        r.window_s,
+        if r.budget_limited {
+            " (budget-limited)"
+        } else {
+            ""
+        },
+        r.window_wall_s,
+        r.window_cpu_s.map_or("?".into(), |c| format!("{c:.3e}")),
+        r.wall_per_sim_s,
+        r.steps as Real / r.window_reached_s,
+        r.window_wall_s / r.steps as Real,
+        r.impacts,
+        r.closed_points_end
+    )
+}
+
 /// The fitted exponents of the floor part, as lines for the terminal and MACHINE.txt.
 fn floor_summary(rows: &[FloorRow]) -> Vec<String> {
-    let mut lines = Vec::new();
+    let mut lines: Vec<String> = rows.iter().map(floor_line).collect();
     let fit = |points: &[(Real, Real)], what: &str, lines: &mut Vec<String>| {
         if points.len() >= 2 {
             let (a, b) = (points[0].0, points[points.len() - 1].0);
@@ -713,17 +754,51 @@ fn floor_summary(rows: &[FloorRow]) -> Vec<String> {
     lines
 }
 
-/// `chain_floor_scaling.svg`: the window's cost per simulated second against links (the
-/// complete rows, the budget-limited ones apart), over the common window, and the free
-/// fall's.
-fn floor_chart(path: &Path, rows: &[FloorRow], settings: FloorSettings) -> anyhow::Result<()> {
+/// The exponent fitted to the points from 8 links on (all of them if fewer than two), and
+/// the sizes it spans.
+fn slope_from_8(points: &[(Real, Real)]) -> Option<(Real, Real, Real)> {
+    let big: Vec<(Real, Real)> = points.iter().copied().filter(|p| p.0 >= 8.0).collect();
+    let fitted = if big.len() >= 2 { &big[..] } else { points };
+    (fitted.len() >= 2).then(|| {
+        (
+            chain::power_law_exponent(fitted),
+            fitted[0].0,
+            fitted[fitted.len() - 1].0,
+        )
+    })
+}
+
+/// `chain_floor_scaling.svg`: the window's cost per simulated second against links, in
+/// wall and CPU time (the complete rows; the budget-limited ones apart), over the common
+/// window, and the free fall's.
+fn floor_chart(path: &Path, rows: &[FloorRow]) -> anyhow::Result<()> {
+    let Some(first) = rows.first() else {
+        return Ok(());
+    };
+    let (window, budget) = (first.window_s, first.budget_s);
     let complete = complete_points(rows);
-    let big: Vec<(Real, Real)> = complete.iter().copied().filter(|p| p.0 >= 8.0).collect();
-    let slope = chain::power_law_exponent(if big.len() >= 2 { &big } else { &complete });
+    let cpu: Vec<(Real, Real)> = (rows.iter())
+        .filter(|r| !r.budget_limited && r.stop == "t_end")
+        .filter_map(|r| Some((Real::from(r.links), r.cpu_per_sim_s?)))
+        .collect();
+    let slope = |points: &[(Real, Real)]| {
+        slope_from_8(points).map_or(String::new(), |(p, a, b)| {
+            format!(" (links^{p:.2} over {a}–{b})")
+        })
+    };
     let mut series = vec![Series {
-        name: format!("the {} s after the first impact", settings.window),
+        name: format!(
+            "wall, the {window} s after the first impact{}",
+            slope(&complete)
+        ),
         points: complete,
     }];
+    if !cpu.is_empty() {
+        series.push(Series {
+            name: format!("CPU, the {window} s after the first impact{}", slope(&cpu)),
+            points: cpu,
+        });
+    }
     let limited: Vec<(Real, Real)> = (rows.iter())
         .filter(|r| (r.budget_limited || r.stop != "t_end") && r.wall_per_sim_s.is_finite())
         .map(|r| (Real::from(r.links), r.wall_per_sim_s))
@@ -731,22 +806,25 @@ fn floor_chart(path: &Path, rows: &[FloorRow], settings: FloorSettings) -> anyho
     if !limited.is_empty() {
         series.push(Series {
             name: format!(
-                "budget-limited ({} s of wall): wall / simulated time reached",
-                settings.budget
+                "wall, stopped by the budget ({budget} s): wall / simulated time reached"
             ),
             points: limited,
         });
     }
     if let Some(tau) = rows.iter().find_map(|r| r.common_window_s) {
+        let common: Vec<(Real, Real)> = (rows.iter())
+            .filter_map(|r| Some((Real::from(r.links), r.common_wall_per_sim_s?)))
+            .collect();
         series.push(Series {
-            name: format!("the first {tau:.3} s after the first impact (every size)"),
-            points: (rows.iter())
-                .filter_map(|r| Some((Real::from(r.links), r.common_wall_per_sim_s?)))
-                .collect(),
+            name: format!(
+                "wall, the first {tau:.3} s after the first impact (every size){}",
+                slope(&common)
+            ),
+            points: common,
         });
     }
     series.push(Series {
-        name: "free fall before the first impact".into(),
+        name: "wall, free fall before the first impact".into(),
         points: (rows.iter())
             .filter(|r| r.t_first_impact.is_some())
             .map(|r| (Real::from(r.links), r.free_fall_wall_per_sim_s))
@@ -755,11 +833,72 @@ fn floor_chart(path: &Path, rows: &[FloorRow], settings: FloorSettings) -> anyho
     chart::loglog(
         path,
         Labels {
-            title: &format!(
-                "rope on the floor: event-driven DOPRI5 (slope {slope:.2} from 8 links)"
-            ),
+            title: "rope falling onto the floor: event-driven DOPRI5",
             x: "links",
-            y: "wall time per simulated second",
+            y: "time per simulated second (s)",
+        },
+        &series,
+    )?;
+    floor_step_chart(&path.with_file_name("chain_floor_per_step.svg"), rows)
+}
+
+/// `chain_floor_per_step.svg`: the time of a step against links, in the window (CPU: the
+/// complete rows and the budget-limited ones; wall: the complete rows) and in the free fall
+/// (CPU). The window's cost per simulated second is this times the steps per simulated
+/// second, which a step cap can multiply whatever a step costs.
+fn floor_step_chart(path: &Path, rows: &[FloorRow]) -> anyhow::Result<()> {
+    let limited = |r: &FloorRow| r.budget_limited || r.stop != "t_end";
+    let per_step = |keep: &dyn Fn(&FloorRow) -> bool, time: &dyn Fn(&FloorRow) -> Option<Real>| {
+        (rows.iter())
+            .filter(|r| r.steps > 0 && keep(r))
+            .filter_map(|r| Some((Real::from(r.links), time(r)? / r.steps as Real)))
+            .collect::<Vec<_>>()
+    };
+    let fitted = |name: &str, points: Vec<(Real, Real)>| Series {
+        name: format!(
+            "{name}{}",
+            slope_from_8(&points).map_or(String::new(), |(p, a, b)| format!(
+                " (links^{p:.2} over {a}–{b})"
+            ))
+        ),
+        points,
+    };
+    let mut series = vec![
+        fitted(
+            "CPU, the window after the first impact",
+            per_step(&|r| !limited(r), &|r| r.window_cpu_s),
+        ),
+        fitted(
+            "wall, the window after the first impact",
+            per_step(&|r| !limited(r), &|r| Some(r.window_wall_s)),
+        ),
+    ];
+    let cut = per_step(&limited, &|r| r.window_cpu_s);
+    if !cut.is_empty() {
+        series.push(Series {
+            name: "CPU, the window stopped by the budget".into(),
+            points: cut,
+        });
+    }
+    series.push(Series {
+        name: "CPU, free fall before the first impact".into(),
+        points: (rows.iter())
+            .filter(|r| r.t_first_impact.is_some() && r.free_fall_steps > 0)
+            .filter_map(|r| {
+                Some((
+                    Real::from(r.links),
+                    r.free_fall_cpu_s? / r.free_fall_steps as Real,
+                ))
+            })
+            .collect(),
+    });
+    series.retain(|s| !s.points.is_empty());
+    chart::loglog(
+        path,
+        Labels {
+            title: "rope falling onto the floor: time per accepted step",
+            x: "links",
+            y: "time per step (s)",
         },
         &series,
     )?;
