@@ -8,11 +8,13 @@
 //! [`rapier`]). [`metrics`] compares a trace with a reference trace (a closed form, or a
 //! tight DOPRI5 run: [`reference`]); [`sweep`] runs the settings of each method and times
 //! them; [`table`] writes and reads the CSV rows; [`chart`] draws the log–log charts;
-//! [`chain`] measures the scaling with the number of links.
+//! [`chain`] measures the scaling with the number of links in free fall, [`chain_floor`]
+//! with a floor.
 //!
 //! `ricochet bench` (the command line) puts them together.
 
 pub mod chain;
+pub mod chain_floor;
 pub mod chart;
 mod error;
 pub mod metrics;

@@ -1,5 +1,6 @@
 //! The CSV tables of `ricochet bench`: one row per scene × method × setting
-//! ([`Row`]), one row per chain length ([`ChainRow`]). Written and read back with the
+//! ([`Row`]), one row per chain length ([`ChainRow`]), one row per rope length on the
+//! floor ([`FloorRow`]). Written and read back with the
 //! `csv` crate; non-finite errors are written as `inf` / `NaN` and read back as such.
 
 use std::path::Path;
@@ -87,6 +88,74 @@ pub struct ChainRow {
     pub gaps_eval_s: Real,
     /// Why the run stopped.
     pub stop: String,
+}
+
+/// The cost of the rope on the floor with `links` links over the window after its first
+/// impact (`workprec::chain_floor`). The counters `steps` … `events` and `impacts` are the
+/// window's (from the first impact on).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FloorRow {
+    /// Number of links.
+    pub links: u32,
+    /// Number of contact pairs (link–link two or more apart, link–floor).
+    pub pairs: u32,
+    /// The window asked for after the first impact (s of simulated time).
+    pub window_s: Real,
+    /// The wall-time budget of the run through the window (s).
+    pub budget_s: Real,
+    /// Time of the first impact `t₁` (s); empty if the first run found none.
+    pub t_first_impact: Option<Real>,
+    /// Wall time of the free fall, release to first impact (s).
+    pub free_fall_wall_s: Real,
+    /// Its wall time per simulated second.
+    pub free_fall_wall_per_sim_s: Real,
+    /// Its CPU time (s; the simulating thread's, empty where it cannot be read).
+    pub free_fall_cpu_s: Option<Real>,
+    /// Accepted steps of the free fall.
+    pub free_fall_steps: u64,
+    /// Simulated time reached by the run through the window (s).
+    pub t_reached: Real,
+    /// How much of the window it reached, `t_reached − t₁` (s).
+    pub window_reached_s: Real,
+    /// Wall time of the run through the window, free fall included (s).
+    pub wall_s: Real,
+    /// Wall time spent in the window, after the first impact (s).
+    pub window_wall_s: Real,
+    /// Cost per simulated second: `window_wall_s / window_reached_s`.
+    pub wall_per_sim_s: Real,
+    /// CPU time spent in the window (s; empty where it cannot be read).
+    pub window_cpu_s: Option<Real>,
+    /// CPU time per simulated second: `window_cpu_s / window_reached_s`.
+    pub cpu_per_sim_s: Option<Real>,
+    /// The shortest window reached by any row of the table (s; empty if none).
+    pub common_window_s: Option<Real>,
+    /// The cost per simulated second over that shortest window.
+    pub common_wall_per_sim_s: Option<Real>,
+    /// Accepted steps in the window.
+    pub steps: u64,
+    /// Rejected steps in the window.
+    pub rejected: u64,
+    /// Right-hand-side evaluations of the integrator in the window.
+    pub rhs_evals: u64,
+    /// Events located in the window.
+    pub events: u64,
+    /// Impacts in the window (contact points struck; the first impact's included).
+    pub impacts: u64,
+    /// Distinct instants of those impacts.
+    pub impact_instants: u64,
+    /// Pairs closed (sticking or sliding) at the end of the run.
+    pub closed_pairs_end: u32,
+    /// Contact points of those pairs within the closed-contact tolerance at the end.
+    pub closed_points_end: u32,
+    /// The most pairs closed at once during the run.
+    pub max_closed_pairs: u32,
+    /// Whether the budget stopped the run before the end of the window.
+    pub budget_limited: bool,
+    /// Why the run stopped: `t_end`, `budget` or `error`.
+    pub stop: String,
+    /// The machine's load average (1 min) before the size's runs (empty where it cannot be
+    /// read): the wall times grow with it on a shared machine, the CPU times much less.
+    pub load_before: Option<Real>,
 }
 
 /// Writes `rows` to `path` as CSV with a header.

@@ -1,7 +1,8 @@
 //! `ricochet bench`: the work-precision charts (error against wall time, one curve per
 //! method, one chart per scene and error kind) and the scaling of the event-driven loop
-//! with the number of links of a chain, measured in one process; CSV, SVG and a
-//! description of the machine go to `--out` (default `docs/charts`).
+//! with the number of links of a chain, in free fall and (`--floor`) falling onto a floor,
+//! measured in one process; CSV, SVG and a description of the machine go to `--out`
+//! (default `docs/charts`).
 //!
 //! A subcommand rather than a criterion bench: it must run several methods on the same
 //! scenes with their accuracy, write tables and charts, and take options; criterion
@@ -15,11 +16,12 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use ricochet::math::Real;
 use ricochet::scene::Scene;
+use ricochet::workprec::chain_floor::{self, FloorSettings};
 use ricochet::workprec::chart::{self, Labels, Series};
 use ricochet::workprec::metrics::{Errors, errors};
 use ricochet::workprec::reference::{self, Ball, TIGHT_RTOL};
 use ricochet::workprec::sweep::{self, Method};
-use ricochet::workprec::table::{self, ChainRow, Row};
+use ricochet::workprec::table::{self, ChainRow, FloorRow, Row};
 use ricochet::workprec::{Trace, chain};
 
 /// Options of `ricochet bench`.
@@ -46,6 +48,27 @@ pub struct Args {
     /// Simulated time of each chain run (s): the free fall before any contact.
     #[arg(long, default_value_t = 0.05)]
     chain_t_end: Real,
+    /// Run the scaling of the rope falling onto the floor (`tests/data/chain_floor.toml`
+    /// cut into 1, 2, 4, ... links; long: up to the budget per size).
+    #[arg(long)]
+    floor: bool,
+    /// Largest rope of the floor part (links).
+    #[arg(long, default_value_t = 256)]
+    floor_max_links: usize,
+    /// The floor part's sizes instead of the powers of two (comma-separated links).
+    #[arg(long, value_delimiter = ',')]
+    floor_links: Option<Vec<usize>>,
+    /// The window measured after the rope's first impact (s of simulated time).
+    #[arg(long, default_value_t = 0.5)]
+    floor_window: Real,
+    /// Wall-time budget of each size's run through the window (s): a run that exhausts it
+    /// stops there and its row says how far it got.
+    #[arg(long, default_value_t = 1200.0)]
+    floor_budget: Real,
+    /// Redraw `chain_floor_scaling.svg` and print the fits from the floor part's CSV in
+    /// `--out`, without measuring (MACHINE.txt unchanged).
+    #[arg(long)]
+    floor_redraw: bool,
 }
 
 /// A scene of the work-precision part: its file, end time, the impacts compared, and how
@@ -114,6 +137,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if args.max_links == 0 {
         bail!("--max-links must be at least 1");
     }
+    if !(args.floor_window.is_finite() && args.floor_window > 0.0) {
+        bail!("--floor-window must be a positive number of seconds");
+    }
+    if args.floor_budget.is_nan() || args.floor_budget <= 0.0 {
+        bail!("--floor-budget must be a positive number of seconds");
+    }
+    if args.floor_max_links == 0 || args.floor_links.as_ref().is_some_and(|l| l.contains(&0)) {
+        bail!("a rope has at least 1 link");
+    }
     let scenes_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let cases: Vec<&Case> = match &args.scenes {
         None => CASES.iter().collect(),
@@ -155,7 +187,24 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if !args.no_chain {
         chain_scaling(&scenes_dir, &args, &mut notes)?;
     }
-    machine(&args.out, &notes)?;
+    let mut floor_notes = None;
+    if args.floor_redraw {
+        let csv = args.out.join("chain_floor.csv");
+        let rows: Vec<FloorRow> = table::read(&csv)?;
+        for line in floor_summary(&rows) {
+            println!("  {line}");
+        }
+        floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
+        println!("redrew chain_floor_scaling.svg from {}", csv.display());
+    } else if args.floor {
+        let mut lines = String::new();
+        floor_scaling(&args, &mut lines)?;
+        floor_notes = Some(lines);
+    }
+    let main_notes = (!(args.no_workprec && args.no_chain)).then_some(notes.as_str());
+    if main_notes.is_some() || floor_notes.is_some() {
+        machine(&args.out, main_notes, floor_notes.as_deref())?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -539,8 +588,358 @@ fn chain_scaling(dir: &Path, args: &Args, notes: &mut String) -> anyhow::Result<
     Ok(())
 }
 
-/// `MACHINE.txt`: the CPU, cores, load, date, rustc, commit, and the figures printed.
-fn machine(out: &Path, notes: &str) -> anyhow::Result<()> {
+/// The scaling of the rope falling onto the floor (`workprec::chain_floor`).
+fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
+    let sizes: Vec<usize> = match &args.floor_links {
+        Some(links) => links.clone(),
+        None => std::iter::successors(Some(1usize), |n| n.checked_mul(2))
+            .take_while(|&n| n <= args.floor_max_links)
+            .collect(),
+    };
+    let settings = FloorSettings {
+        window: args.floor_window,
+        budget: args.floor_budget,
+    };
+    println!(
+        "\nrope on the floor, DOPRI5 at the scene's tolerances, {} s after the first impact, \
+         budget {} s of wall time per size:",
+        settings.window, settings.budget
+    );
+    let mut rows: Vec<FloorRow> = Vec::new();
+    let mut readings: Vec<Vec<(Real, Real)>> = Vec::new();
+    for &links in &sizes {
+        let mut r = Vec::new();
+        let row = chain_floor::measure(links, settings, &mut r)?;
+        println!(
+            "  {:>3} links: first impact at {} s after {:.3e} s of wall ({} steps); window \
+             reached {:.4} s of {} in {:.3e} s of wall: {:.3e} wall s ({} CPU s) per \
+             simulated s{}; {} steps ({} rejected), {} rhs, {} events, {} impacts at {} \
+             instants; closed at the end {} pairs, {} points (most pairs at once {}); {}; load \
+             before {}",
+            row.links,
+            row.t_first_impact
+                .map_or("(none)".into(), |t| format!("{t:.4}")),
+            row.free_fall_wall_s,
+            row.free_fall_steps,
+            row.window_reached_s,
+            row.window_s,
+            row.window_wall_s,
+            row.wall_per_sim_s,
+            row.cpu_per_sim_s.map_or("?".into(), |c| format!("{c:.3e}")),
+            if row.budget_limited {
+                " (budget-limited)"
+            } else {
+                ""
+            },
+            row.steps,
+            row.rejected,
+            row.rhs_evals,
+            row.events,
+            row.impacts,
+            row.impact_instants,
+            row.closed_pairs_end,
+            row.closed_points_end,
+            row.max_closed_pairs,
+            row.stop,
+            row.load_before.map_or("?".into(), |l| l.to_string())
+        );
+        rows.push(row);
+        readings.push(r);
+    }
+    chain_floor::common_window(&mut rows, &readings);
+    let csv = args.out.join("chain_floor.csv");
+    table::write(&csv, &rows)?;
+    let lines = floor_summary(&rows);
+    for line in &lines {
+        println!("  {line}");
+        let _ = writeln!(notes, "{line}");
+    }
+    floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
+    println!(
+        "wrote {}, chain_floor_scaling.svg and chain_floor_per_step.svg",
+        csv.display()
+    );
+    Ok(())
+}
+
+/// The complete rows' points `(links, cost per simulated second)` of the window.
+fn complete_points(rows: &[FloorRow]) -> Vec<(Real, Real)> {
+    (rows.iter())
+        .filter(|r| !r.budget_limited && r.stop == "t_end" && r.wall_per_sim_s.is_finite())
+        .map(|r| (Real::from(r.links), r.wall_per_sim_s))
+        .collect()
+}
+
+/// One size's figures in a line: the window's cost, its steps, the cost of a step.
+fn floor_line(r: &FloorRow) -> String {
+    format!(
+        "chain_floor {:>3} links: {:.4} s of the {} s window{} in {:.3e} s wall, {} CPU s: \
+         {:.3e} wall s per simulated s, {:.3e} steps per simulated s, {:.3e} wall s per \
+         step; {} impacts; {} closed points at the end",
+        r.links,
+        r.window_reached_s,
+        r.window_s,
+        if r.budget_limited {
+            " (budget-limited)"
+        } else {
+            ""
+        },
+        r.window_wall_s,
+        r.window_cpu_s.map_or("?".into(), |c| format!("{c:.3e}")),
+        r.wall_per_sim_s,
+        r.steps as Real / r.window_reached_s,
+        r.window_wall_s / r.steps as Real,
+        r.impacts,
+        r.closed_points_end
+    )
+}
+
+/// The fitted exponents of the floor part, as lines for the terminal and MACHINE.txt.
+fn floor_summary(rows: &[FloorRow]) -> Vec<String> {
+    let mut lines: Vec<String> = rows.iter().map(floor_line).collect();
+    let fit = |points: &[(Real, Real)], what: &str, lines: &mut Vec<String>| {
+        if points.len() >= 2 {
+            let (a, b) = (points[0].0, points[points.len() - 1].0);
+            lines.push(format!(
+                "chain_floor: {what} ∝ links^{:.2} over {a}–{b} links ({} sizes)",
+                chain::power_law_exponent(points),
+                points.len()
+            ));
+        }
+    };
+    let complete = complete_points(rows);
+    fit(
+        &complete,
+        "wall time per simulated second of the window",
+        &mut lines,
+    );
+    let big: Vec<(Real, Real)> = complete.iter().copied().filter(|p| p.0 >= 8.0).collect();
+    if big.len() < complete.len() {
+        fit(
+            &big,
+            "wall time per simulated second of the window",
+            &mut lines,
+        );
+    }
+    let common: Vec<(Real, Real)> = (rows.iter())
+        .filter_map(|r| Some((Real::from(r.links), r.common_wall_per_sim_s?)))
+        .collect();
+    if let Some(tau) = rows.iter().find_map(|r| r.common_window_s) {
+        let big: Vec<(Real, Real)> = common.iter().copied().filter(|p| p.0 >= 8.0).collect();
+        fit(
+            &big,
+            &format!("wall time per simulated second of the first {tau:.4} s after the impact"),
+            &mut lines,
+        );
+    }
+    let fall: Vec<(Real, Real)> = (rows.iter())
+        .filter(|r| r.t_first_impact.is_some() && r.links >= 8)
+        .map(|r| (Real::from(r.links), r.free_fall_wall_per_sim_s))
+        .collect();
+    fit(
+        &fall,
+        "wall time per simulated second of the free fall",
+        &mut lines,
+    );
+    for r in rows
+        .iter()
+        .filter(|r| r.budget_limited || r.stop != "t_end")
+    {
+        lines.push(format!(
+            "chain_floor: {} links stopped ({}) {:.4} s into the {} s window after {:.0} s of \
+             wall: {:.3e} wall s per simulated s reached",
+            r.links, r.stop, r.window_reached_s, r.window_s, r.wall_s, r.wall_per_sim_s
+        ));
+    }
+    lines
+}
+
+/// The exponent fitted to the points from 8 links on (all of them if fewer than two), and
+/// the sizes it spans.
+fn slope_from_8(points: &[(Real, Real)]) -> Option<(Real, Real, Real)> {
+    let big: Vec<(Real, Real)> = points.iter().copied().filter(|p| p.0 >= 8.0).collect();
+    let fitted = if big.len() >= 2 { &big[..] } else { points };
+    (fitted.len() >= 2).then(|| {
+        (
+            chain::power_law_exponent(fitted),
+            fitted[0].0,
+            fitted[fitted.len() - 1].0,
+        )
+    })
+}
+
+/// `chain_floor_scaling.svg`: the window's cost per simulated second against links, in
+/// wall and CPU time (the complete rows; the budget-limited ones apart), over the common
+/// window, and the free fall's.
+fn floor_chart(path: &Path, rows: &[FloorRow]) -> anyhow::Result<()> {
+    let Some(first) = rows.first() else {
+        return Ok(());
+    };
+    let (window, budget) = (first.window_s, first.budget_s);
+    let complete = complete_points(rows);
+    let cpu: Vec<(Real, Real)> = (rows.iter())
+        .filter(|r| !r.budget_limited && r.stop == "t_end")
+        .filter_map(|r| Some((Real::from(r.links), r.cpu_per_sim_s?)))
+        .collect();
+    let slope = |points: &[(Real, Real)]| {
+        slope_from_8(points).map_or(String::new(), |(p, a, b)| {
+            format!(" (links^{p:.2} over {a}–{b})")
+        })
+    };
+    let mut series = vec![Series {
+        name: format!(
+            "wall, the {window} s after the first impact{}",
+            slope(&complete)
+        ),
+        points: complete,
+    }];
+    if !cpu.is_empty() {
+        series.push(Series {
+            name: format!("CPU, the {window} s after the first impact{}", slope(&cpu)),
+            points: cpu,
+        });
+    }
+    let limited: Vec<(Real, Real)> = (rows.iter())
+        .filter(|r| (r.budget_limited || r.stop != "t_end") && r.wall_per_sim_s.is_finite())
+        .map(|r| (Real::from(r.links), r.wall_per_sim_s))
+        .collect();
+    if !limited.is_empty() {
+        series.push(Series {
+            name: format!(
+                "wall, stopped by the budget ({budget} s): wall / simulated time reached"
+            ),
+            points: limited,
+        });
+    }
+    if let Some(tau) = rows.iter().find_map(|r| r.common_window_s) {
+        let common: Vec<(Real, Real)> = (rows.iter())
+            .filter_map(|r| Some((Real::from(r.links), r.common_wall_per_sim_s?)))
+            .collect();
+        series.push(Series {
+            name: format!(
+                "wall, the first {tau:.3} s after the first impact (every size){}",
+                slope(&common)
+            ),
+            points: common,
+        });
+    }
+    series.push(Series {
+        name: "wall, free fall before the first impact".into(),
+        points: (rows.iter())
+            .filter(|r| r.t_first_impact.is_some())
+            .map(|r| (Real::from(r.links), r.free_fall_wall_per_sim_s))
+            .collect(),
+    });
+    chart::loglog(
+        path,
+        Labels {
+            title: "rope falling onto the floor: event-driven DOPRI5",
+            x: "links",
+            y: "time per simulated second (s)",
+        },
+        &series,
+    )?;
+    floor_step_chart(&path.with_file_name("chain_floor_per_step.svg"), rows)
+}
+
+/// `chain_floor_per_step.svg`: the time of a step against links, in the window (CPU: the
+/// complete rows and the budget-limited ones; wall: the complete rows) and in the free fall
+/// (CPU). The window's cost per simulated second is this times the steps per simulated
+/// second, which a step cap can multiply whatever a step costs.
+fn floor_step_chart(path: &Path, rows: &[FloorRow]) -> anyhow::Result<()> {
+    let limited = |r: &FloorRow| r.budget_limited || r.stop != "t_end";
+    let per_step = |keep: &dyn Fn(&FloorRow) -> bool, time: &dyn Fn(&FloorRow) -> Option<Real>| {
+        (rows.iter())
+            .filter(|r| r.steps > 0 && keep(r))
+            .filter_map(|r| Some((Real::from(r.links), time(r)? / r.steps as Real)))
+            .collect::<Vec<_>>()
+    };
+    let fitted = |name: &str, points: Vec<(Real, Real)>| Series {
+        name: format!(
+            "{name}{}",
+            slope_from_8(&points).map_or(String::new(), |(p, a, b)| format!(
+                " (links^{p:.2} over {a}–{b})"
+            ))
+        ),
+        points,
+    };
+    let mut series = vec![
+        fitted(
+            "CPU, the window after the first impact",
+            per_step(&|r| !limited(r), &|r| r.window_cpu_s),
+        ),
+        fitted(
+            "wall, the window after the first impact",
+            per_step(&|r| !limited(r), &|r| Some(r.window_wall_s)),
+        ),
+    ];
+    let cut = per_step(&limited, &|r| r.window_cpu_s);
+    if !cut.is_empty() {
+        series.push(Series {
+            name: "CPU, the window stopped by the budget".into(),
+            points: cut,
+        });
+    }
+    series.push(Series {
+        name: "CPU, free fall before the first impact".into(),
+        points: (rows.iter())
+            .filter(|r| r.t_first_impact.is_some() && r.free_fall_steps > 0)
+            .filter_map(|r| {
+                Some((
+                    Real::from(r.links),
+                    r.free_fall_cpu_s? / r.free_fall_steps as Real,
+                ))
+            })
+            .collect(),
+    });
+    series.retain(|s| !s.points.is_empty());
+    chart::loglog(
+        path,
+        Labels {
+            title: "rope falling onto the floor: time per accepted step",
+            x: "links",
+            y: "time per step (s)",
+        },
+        &series,
+    )?;
+    Ok(())
+}
+
+/// The heading of the floor part's section of `MACHINE.txt`.
+const FLOOR_SECTION: &str = "## chain_floor (`ricochet bench --floor`)";
+
+/// `MACHINE.txt`: the CPU, cores, load, date, rustc, commit, and the figures printed; one
+/// section for the work-precision and chain parts (`main`), one for the floor part
+/// (`floor`), each with its own machine lines. A part that did not run (`None`) keeps its
+/// section of the file as it was.
+fn machine(out: &Path, main: Option<&str>, floor: Option<&str>) -> anyhow::Result<()> {
+    let path = out.join("MACHINE.txt");
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    let (old_main, old_floor) = match old.find(FLOOR_SECTION) {
+        Some(k) => (&old[..k], &old[k..]),
+        None => (old.as_str(), ""),
+    };
+    let mut text = match main {
+        Some(notes) => machine_lines(notes),
+        None => old_main.to_owned(),
+    };
+    let floor = match floor {
+        Some(notes) => format!("{FLOOR_SECTION}\n\n{}", machine_lines(notes)),
+        None => old_floor.to_owned(),
+    };
+    if !floor.is_empty() {
+        if !text.is_empty() && !text.ends_with("\n\n") {
+            text.push_str(if text.ends_with('\n') { "\n" } else { "\n\n" });
+        }
+        text.push_str(&floor);
+    }
+    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// The machine's lines and `notes` after them.
+fn machine_lines(notes: &str) -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
@@ -560,7 +959,7 @@ fn machine(out: &Path, notes: &str) -> anyhow::Result<()> {
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
             .unwrap_or_else(|| "unknown".into())
     };
-    let text = format!(
+    format!(
         "cpu: {cpu}\ncores: {cores}\nload average (1, 5, 15 min) at the end: {}\ndate: {}\n\
          rustc: {}\ncommit: {}\nfeatures: {}\n\n{notes}",
         load.split_whitespace()
@@ -575,9 +974,5 @@ fn machine(out: &Path, notes: &str) -> anyhow::Result<()> {
         } else {
             "(none)"
         },
-    );
-    let path = out.join("MACHINE.txt");
-    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
-    println!("wrote {}", path.display());
-    Ok(())
+    )
 }
