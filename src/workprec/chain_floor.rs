@@ -1,7 +1,7 @@
 //! The scaling of the event-driven loop with the number of links of a rope that falls
 //! onto a floor (issue 15): what contact costs as the mechanism grows.
 //!
-//! **The rope.** `tests/data/chain_floor.toml` cut into `N` links: a rope of
+//! **The rope.** `scenes/chain_floor.toml` cut into `N` links: a rope of
 //! [`ROPE_LENGTH`] = 3.2 m and [`ROPE_MASS`] = 1.6 kg hanging from a pivot
 //! [`PIVOT_HEIGHT`] = 1 m above a floor (`e = 0.2`, `μ = 0.4`), released straight and
 //! horizontal at rest. Each link is `L = 3.2/N` m long, `1.6/N` kg, a capsule of radius
@@ -53,7 +53,7 @@ use crate::sim::{
 };
 use crate::state::Data;
 
-/// Length of the rope, all links together (m): `tests/data/chain_floor.toml`'s 32 × 0.1 m.
+/// Length of the rope, all links together (m): `scenes/chain_floor.toml`'s 32 × 0.1 m.
 pub const ROPE_LENGTH: Real = 3.2;
 /// Mass of the rope (kg): 32 × 50 g.
 pub const ROPE_MASS: Real = 1.6;
@@ -62,7 +62,7 @@ pub const RADIUS_PER_LENGTH: Real = 0.1;
 /// Height of the pivot above the floor (m).
 pub const PIVOT_HEIGHT: Real = 1.0;
 
-/// The scene of the rope cut into `links` links: `tests/data/chain_floor.toml` with the
+/// The scene of the rope cut into `links` links: `scenes/chain_floor.toml` with the
 /// link length, mass and radius divided among them (see the module doc).
 pub fn scene_text(links: usize) -> String {
     let n = links.max(1) as Real;
@@ -73,7 +73,7 @@ pub fn scene_text(links: usize) -> String {
     let mass = ROPE_MASS / n;
     let radius = 0.32 / n;
     format!(
-        r#"# tests/data/chain_floor.toml cut into {links} links (ricochet::workprec::chain_floor).
+        r#"# scenes/chain_floor.toml cut into {links} links (ricochet::workprec::chain_floor).
 version = 1
 name = "chain_floor_{links}"
 description = "A {ROPE_LENGTH} m rope of {links} links released horizontally, falling to lie on the floor {PIVOT_HEIGHT} m below its pivot"

@@ -2,7 +2,7 @@
 //! closed-form ball against its defining equations, a CSV round trip, and (feature
 //! `rapier`) the rapier translation of a scene against the scene's masses and shapes; the
 //! rope on the floor of the chain scaling (`chain_floor`): its 32 links against
-//! `tests/data/chain_floor.toml`, its length, mass, inertia and shape at every size, its
+//! `scenes/chain_floor.toml`, its length, mass, inertia and shape at every size, its
 //! measurement (window, counters, budget), its CSV rows and the exponent fit.
 
 use ricochet::workprec::metrics::errors;
@@ -220,11 +220,11 @@ mod chain_floor {
     };
     use ricochet::workprec::table::{self, FloorRow};
 
-    /// The rope cut into 32 links is `tests/data/chain_floor.toml`: the same model (bodies,
+    /// The rope cut into 32 links is `scenes/chain_floor.toml`: the same model (bodies,
     /// joints, shapes, pairs and materials), initial state and settings.
     #[test]
     fn the_32_link_rope_is_the_chain_floor_file() {
-        let path = format!("{}/tests/data/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/scenes/chain_floor.toml", env!("CARGO_MANIFEST_DIR"));
         let file = ricochet::scene::load(&path).unwrap();
         let rope = chain_floor::scene(32).unwrap();
         assert_eq!(rope.model.bodies(), file.model.bodies());

@@ -48,7 +48,7 @@ pub struct Args {
     /// Simulated time of each chain run (s): the free fall before any contact.
     #[arg(long, default_value_t = 0.05)]
     chain_t_end: Real,
-    /// Run the scaling of the rope falling onto the floor (`tests/data/chain_floor.toml`
+    /// Run the scaling of the rope falling onto the floor (`scenes/chain_floor.toml`
     /// cut into 1, 2, 4, ... links; long: up to the budget per size).
     #[arg(long)]
     floor: bool,
