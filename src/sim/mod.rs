@@ -69,6 +69,12 @@ struct Disarm {
     /// The step cap while disarmed (s): steps short enough to see a separating contact
     /// close again (infinite for a grazing one).
     cap: Real,
+    /// The time (s) after which the cap no longer holds, though the pair may stay
+    /// disarmed: ten caps after the crossing, a contact separating at the speed the cap
+    /// was made for is 100 gap_tol clear; one still within the tolerance is not
+    /// separating at that speed but held (the end of a link lying on the floor at a
+    /// hinge), and its floor alone watches it.
+    until: Real,
     /// The gap (m, `≤ −gap_tol`) below which the point counts as sinking: the event
     /// function is `gap − floor` meanwhile.
     floor: Real,
@@ -532,13 +538,16 @@ impl<'m> Simulation<'m> {
     }
 
     /// The step cap before [`Self::cap_for_spin`]: the integrator's, or the shortest cap
-    /// of the pairs disarmed now (see `disarm_open_crossing`). Each cap lasts as long as
-    /// its own pair stays disarmed: a grazing pair held at a zero gap for good (the end of
-    /// a link lying on the floor at a hinge whose other link's end is closed) must not
-    /// keep the cap of a pair that separated long ago.
+    /// of the pairs disarmed now (see `disarm_open_crossing`). Each cap lasts while its
+    /// own pair stays disarmed, and no longer than `CAP_LIFETIME` caps: a pair held at a
+    /// zero gap for good (the end of a link lying on the floor at a hinge whose other
+    /// link's end is closed) must not keep the cap of a separation long over.
     fn h_max_base(&self) -> Real {
+        let t = self.stepper.t();
         (self.disarmed.changed())
-            .filter_map(|pair| Some(self.disarmed[pair.index()]?.cap))
+            .filter_map(|pair| self.disarmed[pair.index()])
+            .filter(|d| t < d.until)
+            .map(|d| d.cap)
             .fold(self.settings.integrator.h_max, Real::min)
     }
 

@@ -658,3 +658,49 @@ fn the_32_link_chain_lifts_off_past_the_old_stall() {
     );
     assert_simultaneous_impacts_obey_newton(&rec);
 }
+
+/// The 64-link rope (`scenes/chain_floor.toml` cut into 64 links,
+/// `ricochet::workprec::chain_floor`) through its first 0.15 s on the floor. A lift-off
+/// that closes nothing disarms its pair's gap event, with steps capped at `10 gap_tol / v`
+/// so that a contact separating at `v` is seen to close again. The end of link 40, lying
+/// on the floor at a hinge, was disarmed at 0.4527 s and stayed within the tolerance for
+/// good: its 3.3 µs cap held 31,103 of the first 35,635 steps of the window, and the run to
+/// 0.6 s took 16,922 steps. The cap now lasts ten caps (a contact separating at that speed
+/// is then 100 gap_tol clear): 4,909 steps, and the floor of the disarmed pair still
+/// watches it sink.
+#[test]
+fn a_held_pair_does_not_cap_the_steps_for_good() {
+    let mut scene = ricochet::workprec::chain_floor::scene(64).unwrap();
+    scene.settings.t_end = 0.6;
+    let (rec, summary, scales) = run(&scene, MaterialOverride::default());
+    println!(
+        "{}; {} impacts, {} steps",
+        summary.stop,
+        rec.impacts.len(),
+        summary.counters.steps
+    );
+    assert!(
+        matches!(summary.stop, StopReason::EndTime),
+        "{}",
+        summary.stop
+    );
+    assert!(
+        summary.counters.steps < 8_000,
+        "{} steps to 0.6 s",
+        summary.counters.steps
+    );
+    assert_simultaneous_impacts_obey_newton(&rec);
+    // No point sank: at every sample, every gap of the rope with the floor stays above
+    // −10 gap_tol.
+    let model = &scene.model;
+    let mut data = ricochet::state::Data::new(model);
+    let mut deepest = f64::INFINITY;
+    for (t, q, _, _) in &rec.samples {
+        ricochet::kinematics::update_positions(model, &mut data, *t, q).unwrap();
+        for p in model.pair_ids() {
+            let gap = ricochet::contact::signed_gap(model, &data, p, f64::INFINITY);
+            deepest = deepest.min(gap.unwrap().unwrap());
+        }
+    }
+    assert!(deepest > -10.0 * scales.gap_tol, "deepest gap {deepest} m");
+}
