@@ -121,8 +121,16 @@ impl Simulation<'_> {
         // The impacts so far at this instant, group by group (see `coupling`).
         let mut groups: Vec<GroupImpacts> = Vec::new();
         let mut settled = false;
+        // The instant's threshold lasts through every visit of the contact stage at `t`
+        // (an event found again at once).
+        if self.unresolved.0 != t {
+            self.unresolved = (t, 0.0);
+        }
         for _ in 0..MAX_ROUNDS {
-            let touching = self.touching(t, y)?;
+            let mut touching = self.touching(t, y)?;
+            if impacts_here > 0 {
+                self.leave_unresolved(&mut touching);
+            }
             let group = (self.coupling).groups(self.model, touching.iter().map(|p| p.pair));
             let approaching = |i: usize| touching[i].v_n < -touching[i].still;
             // 1. Impacts, in each group of coupled points with an approaching point; the
@@ -231,6 +239,28 @@ impl Simulation<'_> {
         Ok((changed, None))
     }
 
+    /// After the impacts of a round: an approach slower than `v_drift` that they left is
+    /// below what the laws resolve at this instant, and no longer counts as one until the
+    /// instant ends (`touching` gets the raised threshold). A law leaves such an approach
+    /// where the normal rows of the points are nearly dependent (a folded chain lying on
+    /// itself and on the floor): the part of the velocity along their near-null direction
+    /// needs an impulse beyond the rank the solvers resolve, and repeating the law repeats
+    /// it (the 32-link chain with μ = 0.1 and e = 0: 4.7e-10 m/s left at t = 1.6784 s, the
+    /// same impacts 1,000 times at that instant). Closed points already tolerate `v_drift`.
+    fn leave_unresolved(&mut self, touching: &mut [Touch]) {
+        let left = (touching.iter())
+            .filter(|p| p.v_n < -p.still && -p.v_n <= self.scales.v_drift)
+            .map(|p| -p.v_n)
+            .fold(0.0, Real::max);
+        // Twice what is left: the next round's rounding moves it a little.
+        if left > self.unresolved.1 {
+            self.unresolved.1 = (2.0 * left).min(self.scales.v_drift);
+        }
+        for p in touching.iter_mut() {
+            p.still = p.still.max(self.unresolved.1);
+        }
+    }
+
     /// The number of closed points on the pair of a gap event (slot 0), if it is one.
     fn closed_on(&self, event: Option<&Event>) -> Option<(PairId, usize)> {
         let event = event?;
@@ -317,7 +347,7 @@ impl Simulation<'_> {
                     contact,
                     local,
                     v_n: frame.v_n(),
-                    still: self.scales.v_tiny,
+                    still: self.scales.v_tiny.max(self.unresolved.1),
                 });
             }
         }

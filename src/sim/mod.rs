@@ -110,6 +110,10 @@ pub struct Simulation<'m> {
     /// The pairs whose accumulation of impacts ended at the current instant, until the
     /// mode selection reports them.
     accumulating: PairMap<Option<contacts::Accumulation>>,
+    /// An instant `t` and the approach speed (m/s, at most `v_drift`) that the impact laws
+    /// left unresolved there (see `leave_unresolved`): at `t`, a touching point approaches
+    /// only faster than that.
+    unresolved: (Real, Real),
     /// The bounding boxes of the colliders for the broad phase (see [`broad`]).
     boxes: Vec<parry2d_f64::bounding_volume::Aabb>,
     /// The regions of the half-spaces among them (see [`broad::Plane`]).
@@ -197,6 +201,7 @@ impl<'m> Simulation<'m> {
             slips: PairMap::new(0),
             last_separation: PairMap::new(None),
             accumulating: PairMap::new(None),
+            unresolved: (Real::NAN, 0.0),
             boxes: Vec::new(),
             planes: Vec::new(),
             finder: Default::default(),
