@@ -38,6 +38,9 @@ pub struct MinNorm {
     beta_t: Vec<Real>,
     /// The solution in pivoted order.
     z: Vec<Real>,
+    /// Whether the last solve left out a column that the rounding threshold
+    /// `max(m, n) · ε` would have counted (see [`Self::solve_to`]).
+    truncated: bool,
 }
 
 /// One Householder reflection `H = I − β v vᵀ` with `H x = α e₀`, for the entries `x` of
@@ -135,6 +138,25 @@ impl MinNorm {
     /// x = P Q₂ [T⁻ᵀ (Qᵀ b)₁..r ; 0]
     /// ```
     pub fn solve(&mut self, a: &DMatrix<Real>, b: &DVector<Real>, x: &mut DVector<Real>) -> usize {
+        self.solve_to(a, b, x, 0.0)
+    }
+
+    /// Whether the last solve left out a column that [`Self::solve`]'s rounding
+    /// threshold would have counted.
+    pub fn truncated(&self) -> bool {
+        self.truncated
+    }
+
+    /// [`Self::solve`] with the rank decided at `max(rel_tol, max(m, n) · ε)` times the
+    /// first pivot column's norm: the columns the data determine only to `rel_tol` count
+    /// as dependent.
+    pub fn solve_to(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        x: &mut DVector<Real>,
+        rel_tol: Real,
+    ) -> usize {
         let (m, n) = a.shape();
         debug_assert_eq!(b.len(), m);
         fit_matrix(&mut self.r, m, n);
@@ -149,8 +171,10 @@ impl MinNorm {
                 dot(col, col).sqrt()
             })
             .fold(0.0, Real::max);
-        let tol = m.max(n) as Real * Real::EPSILON * first;
+        let rounding = m.max(n) as Real * Real::EPSILON * first;
+        let tol = rounding.max(rel_tol * first);
         let mut rank = 0;
+        self.truncated = false;
         for k in 0..m.min(n) {
             // The column of largest remaining norm, recomputed: not downdated (LAPACK's
             // xLAQP2), whose other choices among near ties of redundant contact points'
@@ -165,6 +189,7 @@ impl MinNorm {
                 }
             }
             if best.1.sqrt() <= tol {
+                self.truncated = best.1.sqrt() > rounding;
                 break;
             }
             self.r.swap_columns(k, best.0);
@@ -289,6 +314,36 @@ mod tests {
                 (&x - &expected).amax()
             );
         }
+    }
+
+    /// `solve_to` leaves out a column whose remaining norm is below its threshold and
+    /// above the rounding one, and says so: `A = U diag(1, 0.5, 1e-13, 0) Vᵀ` has rank 3
+    /// at rounding, 2 at 1e-10, and the solution at 1e-10 is `V Σ₂⁺ Uᵀ b` with the first
+    /// two singular values alone.
+    #[test]
+    fn a_threshold_above_rounding_leaves_out_what_it_says() {
+        let mut rng = Lcg(5);
+        let (u, v) = (orthogonal(&mut rng, 4), orthogonal(&mut rng, 4));
+        let sigma = [1.0, 0.5, 1e-13, 0.0];
+        let s = DMatrix::from_diagonal(&DVector::from_row_slice(&sigma));
+        let a = &u * s * v.transpose();
+        let b = DVector::from_fn(4, |_, _| rng.next());
+        let mut ws = MinNorm::new();
+        let mut x = DVector::zeros(0);
+        assert_eq!(ws.solve(&a, &b, &mut x), 3);
+        assert!(!ws.truncated());
+        assert_eq!(ws.solve_to(&a, &b, &mut x, 1e-10), 2);
+        assert!(ws.truncated());
+        let mut s_plus = DMatrix::zeros(4, 4);
+        s_plus[(0, 0)] = 1.0;
+        s_plus[(1, 1)] = 2.0;
+        let expected = &v * s_plus * u.transpose() * &b;
+        assert!((&x - &expected).amax() <= 1e-9, "{x} against {expected}");
+        // Nothing between the thresholds: not truncated.
+        let s = DMatrix::from_diagonal(&DVector::from_row_slice(&[1.0, 0.5, 0.0, 0.0]));
+        let a = &u * s * v.transpose();
+        assert_eq!(ws.solve_to(&a, &b, &mut x, 1e-10), 2);
+        assert!(!ws.truncated());
     }
 
     #[test]
