@@ -1007,15 +1007,21 @@ impl Simulation<'_> {
                     Mode::Slide(s) => Hold::Slide(s),
                 };
                 // A point that slid the same way keeps its margin; one that starts to
-                // slide from rest gets one.
+                // slide from rest gets one — also one that slid the same way but whose
+                // slip has stopped (its slip-stop event brought it here): without a margin
+                // its event is at once again (the 32-link chain with μ = 0.1, e = 0.6 at
+                // 2.5315 s: a second point of link25/link27 sliding at v_t = 1.4e-17 m/s
+                // with margin 0, its slip-stop event 1,000 times).
                 let before = (previous.iter())
                     .find(|c| c.pair == p.pair && (c.local - p.local).length() <= near)
                     .filter(|c| c.hold == hold);
+                let fresh = |s: Real| (-s * point.v_t).max(0.0) + SLIP_MARGIN * v_slip;
                 let slip_margin = match (hold, before) {
-                    (_, Some(c)) => c.slip_margin,
-                    (Hold::Slide(s), None) if point.v_t.abs() <= v_slip => {
-                        (-s * point.v_t).max(0.0) + SLIP_MARGIN * v_slip
+                    (Hold::Slide(s), Some(c)) if s * point.v_t + c.slip_margin <= 0.0 => {
+                        c.slip_margin.max(fresh(s))
                     }
+                    (_, Some(c)) => c.slip_margin,
+                    (Hold::Slide(s), None) if point.v_t.abs() <= v_slip => fresh(s),
                     _ => 0.0,
                 };
                 Some(Closed {
