@@ -55,6 +55,35 @@ fn decades(values: impl Iterator<Item = Real>) -> Option<(Real, Real)> {
     })
 }
 
+/// The corner of the legend: the one whose quarter of the plot (in log coordinates, the
+/// half of each axis nearest it) holds the fewest points, upper right on a tie (the
+/// 128-link point of the rope on the floor sat under an upper-right legend).
+fn legend_corner(
+    points: impl Iterator<Item = (Real, Real)>,
+    (x0, x1): (Real, Real),
+    (y0, y1): (Real, Real),
+) -> SeriesLabelPosition {
+    let (xm, ym) = ((x0 * x1).sqrt(), (y0 * y1).sqrt());
+    // Counts in the order upper right, upper left, lower right, lower left.
+    let mut counts = [0usize; 4];
+    for (x, y) in points.filter(|p| p.0.is_finite() && p.1.is_finite() && p.1 > 0.0) {
+        let (right, upper) = (x >= xm, y >= ym);
+        let k = match (upper, right) {
+            (true, true) => 0,
+            (true, false) => 1,
+            (false, true) => 2,
+            (false, false) => 3,
+        };
+        counts[k] += 1;
+    }
+    match (0..4).min_by_key(|&k| (counts[k], k)).unwrap_or(0) {
+        0 => SeriesLabelPosition::UpperRight,
+        1 => SeriesLabelPosition::UpperLeft,
+        2 => SeriesLabelPosition::LowerRight,
+        _ => SeriesLabelPosition::LowerLeft,
+    }
+}
+
 /// Draws `series` on log–log axes into the SVG file `path`.
 pub fn loglog(path: &Path, labels: Labels<'_>, series: &[Series]) -> Result<(), WorkprecError> {
     draw(path, labels, series).map_err(|e| WorkprecError::Chart {
@@ -128,12 +157,44 @@ fn draw(
                 .map(|p| TriangleMarker::new((p.0, p.1), 6, color.filled())),
         )?;
     }
+    let corner = legend_corner(all().copied(), (x0, x1), (y0, y1));
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(corner)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
     root.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rising curve (cost against size) leaves the upper left empty; a falling one
+    /// (error against time) the upper right; with every corner holding points, the one
+    /// with the fewest.
+    #[test]
+    fn the_legend_goes_to_the_emptiest_corner() {
+        let rising = [(1.0, 1.0), (3.0, 3.0), (30.0, 30.0), (100.0, 100.0)];
+        let c = legend_corner(rising.into_iter(), (1.0, 100.0), (1.0, 100.0));
+        assert!(matches!(c, SeriesLabelPosition::UpperLeft));
+        let falling = rising.map(|(x, y)| (x, 100.0 / y));
+        let c = legend_corner(falling.into_iter(), (1.0, 100.0), (1.0, 100.0));
+        assert!(matches!(c, SeriesLabelPosition::UpperRight));
+        // Three points upper right, two upper left, one lower right, two lower left.
+        let pts = [
+            (5.0, 5.0),
+            (6.0, 6.0),
+            (7.0, 7.0),
+            (0.5, 5.0),
+            (0.6, 6.0),
+            (5.0, 0.5),
+            (0.5, 0.5),
+            (0.6, 0.6),
+        ];
+        let c = legend_corner(pts.into_iter(), (0.1, 10.0), (0.1, 10.0));
+        assert!(matches!(c, SeriesLabelPosition::LowerRight));
+    }
 }

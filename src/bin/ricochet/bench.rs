@@ -195,7 +195,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             println!("  {line}");
         }
         floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
-        println!("redrew chain_floor_scaling.svg from {}", csv.display());
+        println!(
+            "redrew chain_floor_scaling.svg and chain_floor_per_step.svg from {}",
+            csv.display()
+        );
     } else if args.floor {
         let mut lines = String::new();
         floor_scaling(&args, &mut lines)?;
