@@ -148,6 +148,19 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
         }
     }
 
+    /// The derivative `ẏ(t)` into `dy`: the stored ends of the step exactly, the dense
+    /// output's derivative inside.
+    fn derivative_at(&mut self, t: Real) {
+        let st = self.stepper;
+        if t == st.t() {
+            self.s.dy.copy_from_slice(st.dy());
+        } else if t == st.t_prev() {
+            self.s.dy.copy_from_slice(st.dy_prev());
+        } else {
+            st.dense_derivative(t, &mut self.s.dy);
+        }
+    }
+
     /// `g(t)` into `scratch.g`.
     pub(crate) fn values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
         self.state_at(t);
@@ -180,14 +193,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// just before. The caller's rate if it has rates, else the one-sided difference of
     /// [`rates`](Self::rates).
     fn rate(&mut self, t: Real, i: usize) -> Result<Real, EventError<G::Error>> {
-        let st = self.stepper;
-        if t == st.t() {
-            self.s.dy.copy_from_slice(st.dy());
-        } else if t == st.t_prev() {
-            self.s.dy.copy_from_slice(st.dy_prev());
-        } else {
-            st.dense_derivative(t, &mut self.s.dy);
-        }
+        self.derivative_at(t);
         let given = self
             .funcs
             .rate(t, &self.s.y, &self.s.dy, i, &mut self.s.gd)
@@ -208,14 +214,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// The caller's `ġ(t)` into `scratch.gd`, if it has rates; `y` must hold the state
     /// at `t` ([`values`](Self::values) at the same `t` just before).
     pub(crate) fn caller_rates(&mut self, t: Real) -> Result<bool, EventError<G::Error>> {
-        let st = self.stepper;
-        if t == st.t() {
-            self.s.dy.copy_from_slice(st.dy());
-        } else if t == st.t_prev() {
-            self.s.dy.copy_from_slice(st.dy_prev());
-        } else {
-            st.dense_derivative(t, &mut self.s.dy);
-        }
+        self.derivative_at(t);
         let given = self
             .funcs
             .rates(t, &self.s.y, &self.s.dy, &mut self.s.gd)

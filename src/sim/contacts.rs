@@ -52,6 +52,27 @@ const SLIP_MARGIN: Real = 0.1;
 /// The most rounds of impacts and mode changes at one instant.
 const MAX_ROUNDS: usize = 100;
 
+/// The points an event names at instant `t` (`new`), with those of the events before it at
+/// the same instant (`|Δt| ≤ 1e-9 (1 + |t|)`), kept in `memo` (the instant and its points):
+/// a point already there (`same`) is not added again. See `lift_offs_at`, `slip_starts_at`.
+fn through_the_instant<T: Clone>(
+    memo: &mut (Real, Vec<T>),
+    t: Real,
+    new: Option<T>,
+    same: impl Fn(&T, &T) -> bool,
+) -> Vec<T> {
+    let same_instant = (t - memo.0).abs() <= 1e-9 * (1.0 + t.abs());
+    if !same_instant {
+        *memo = (t, Vec::new());
+    }
+    if let Some(p) = new
+        && !memo.1.iter().any(|m| same(m, &p))
+    {
+        memo.1.push(p);
+    }
+    memo.1.clone()
+}
+
 /// How many of its caps a disarmed pair's step cap lasts (see `disarm_open_crossing`):
 /// a contact separating at the speed `v` the cap `10 gap_tol / v` was made for is then
 /// 100 gap_tol clear and armed again; one still within the tolerance is held, not
@@ -793,18 +814,11 @@ impl Simulation<'_> {
     /// crossed zero, with those of the events before it at the same instant (`|Δt| ≤
     /// 1e-9 (1 + |t|)`); see `open_lifting_points`.
     fn lift_offs_at(&mut self, t: Real, event: Option<&Event>) -> Vec<(PairId, Vec2)> {
-        let same_instant = (t - self.lift_offs.0).abs() <= 1e-9 * (1.0 + t.abs());
-        if !same_instant {
-            self.lift_offs = (t, Vec::new());
-        }
-        if let Some(lift) = self.lifts_off(event) {
-            let known = (self.lift_offs.1.iter())
-                .any(|l| l.0 == lift.0 && (l.1 - lift.1).length() <= self.scales.gap_tol);
-            if !known {
-                self.lift_offs.1.push(lift);
-            }
-        }
-        self.lift_offs.1.clone()
+        let lift = self.lifts_off(event);
+        let near = self.scales.gap_tol;
+        through_the_instant(&mut self.lift_offs, t, lift, |a, b| {
+            a.0 == b.0 && (a.1 - b.1).length() <= near
+        })
     }
 
     /// The points that start to slip at this instant: the point of `event` if it is a
@@ -815,18 +829,11 @@ impl Simulation<'_> {
     /// selection let the other one stick at its edge, whose slip event came at once (the
     /// 8-link chain stalled at t = 4.8315 s, 1000 events).
     fn slip_starts_at(&mut self, t: Real, event: Option<&Event>) -> Vec<(PairId, Vec2, Real)> {
-        let same_instant = (t - self.slip_starts.0).abs() <= 1e-9 * (1.0 + t.abs());
-        if !same_instant {
-            self.slip_starts = (t, Vec::new());
-        }
-        if let Some(start) = self.starts_to_slip(event) {
-            let known = (self.slip_starts.1.iter())
-                .any(|s| s.0 == start.0 && (s.1 - start.1).length() <= self.scales.gap_tol);
-            if !known {
-                self.slip_starts.1.push(start);
-            }
-        }
-        self.slip_starts.1.clone()
+        let start = self.starts_to_slip(event);
+        let near = self.scales.gap_tol;
+        through_the_instant(&mut self.slip_starts, t, start, |a, b| {
+            a.0 == b.0 && (a.1 - b.1).length() <= near
+        })
     }
 
     /// Selects the modes of the resting points, group by group of coupled points (each a
