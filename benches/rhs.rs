@@ -1,9 +1,12 @@
 //! Right-hand side of the equations of motion — kinematics, the mass matrix by the composite
 //! rigid body algorithm, the bias forces by Newton–Euler, the Cholesky factorization and
-//! the solve, i.e. one `forward_dynamics` — for `scenes/chain.toml` with 1 to 32 links.
+//! the solve, i.e. one `forward_dynamics` — for `scenes/chain.toml` with 1 to 32 links
+//! (from 9 links the articulated-body factor replaces the mass matrix and its Cholesky
+//! factorization). `rhs_factor`: both factors side by side on the rope of
+//! `scenes/chain_floor.toml` cut into 4 to 256 links.
 //!
 //! Expected growth: O(n²) for the mass matrix (a chain has depth n), O(n³/6) for the
-//! factorization, O(n) for the rest; below ~32 links the O(n²) terms dominate.
+//! factorization, O(n) for the rest and for the articulated-body factor.
 //!
 //! `cargo bench --bench rhs`; criterion reports the time per evaluation for each n.
 
@@ -12,7 +15,8 @@ use std::path::Path;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use ricochet::dynamics::{
-    bias_forces, factor_mass_matrix, forward_dynamics, mass_matrix, solve_mass,
+    MassFactor, bias_forces, factor_mass_matrix, forward_dynamics, mass_matrix, mass_pattern,
+    solve_mass,
 };
 use ricochet::kinematics::{forward_kinematics, update_positions, update_velocities};
 use ricochet::scene;
@@ -80,7 +84,7 @@ fn rhs(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("factor_and_solve", n), &n, |b, _| {
             b.iter(|| {
                 factor_mass_matrix(&mut data, 0.0).expect("factor");
-                solve_mass(&data, black_box(&mut x)).expect("solve");
+                solve_mass(&mut data, black_box(&mut x)).expect("solve");
                 black_box(x[0])
             })
         });
@@ -88,5 +92,46 @@ fn rhs(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, rhs);
+/// `forward_dynamics` of an `n`-link chain with each factor of the mass matrix: the dense
+/// Cholesky factorization of the CRBA's `M` (`O(n³)`) and the articulated-body one (`O(n)`),
+/// for [`ricochet::dynamics::ARTICULATED_MIN_SPEEDS`].
+fn factors(c: &mut Criterion) {
+    let mut group = c.benchmark_group("rhs_factor");
+    for n in [4, 8, 12, 16, 24, 32, 64, 128, 256] {
+        let (model, q, u) = chain_state_scaled(n);
+        for (name, factor) in [
+            ("dense", MassFactor::new(mass_pattern(&model), true)),
+            ("articulated", MassFactor::articulated(&model)),
+        ] {
+            let mut data = Data::new(&model);
+            data.mass_factor = factor;
+            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                b.iter(|| {
+                    forward_dynamics(
+                        &model,
+                        &mut data,
+                        black_box(0.0),
+                        black_box(&q),
+                        black_box(&u),
+                    )
+                    .expect("forward dynamics");
+                    black_box(data.udot[0])
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+/// [`chain_state`] for any `n`: the chain of `scenes/chain_floor.toml` cut into `n` links.
+fn chain_state_scaled(n: usize) -> (ricochet::model::Model, Vec<f64>, Vec<f64>) {
+    let model = ricochet::workprec::chain_floor::scene(n)
+        .expect("the rope of scenes/chain_floor.toml")
+        .model;
+    let q: Vec<f64> = (0..n).map(|i| 0.3 + 0.1 * (i % 7) as f64).collect();
+    let u: Vec<f64> = (0..n).map(|i| 0.5 - 0.07 * (i % 5) as f64).collect();
+    (model, q, u)
+}
+
+criterion_group!(benches, rhs, factors);
 criterion_main!(benches);

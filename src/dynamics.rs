@@ -26,6 +26,7 @@
 
 use nalgebra::{Cholesky, DMatrix, DVectorViewMut, Dyn, SymmetricEigen};
 
+use crate::articulated::ArticulatedFactor;
 use crate::kinematics::{KinematicsError, check_len, update_positions, update_velocities};
 use crate::math::Real;
 use crate::model::spatial::{Twist, Wrench};
@@ -75,8 +76,10 @@ pub enum DynamicsError {
 /// factor bit for bit (the two factorizations round differently; a one-ulp change of
 /// `kane_double_pendulum`'s state then takes another event sequence, beyond its golden
 /// file's margin). Its storage is allocated once, so that refactoring allocates nothing.
-/// The impact map solves `M x = b` with it for several right-hand sides
-/// (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
+/// A long chain (from 9 links, [`articulated_pays`]) takes the articulated-body
+/// factorization instead, `O(n)` in work and storage, without forming `M`
+/// ([`ArticulatedFactor`]). The impact map solves `M x = b` with it for several
+/// right-hand sides (`W = J M⁻¹ Jᵀ`, [P, Eq. (20)]).
 #[derive(Clone, Debug)]
 pub struct MassFactor {
     storage: FactorStorage,
@@ -89,6 +92,9 @@ pub struct MassFactor {
 enum FactorStorage {
     /// `M = Lᵀ L` with the tree's sparsity.
     Tree(TreeMatrix),
+    /// `M⁻¹ = Gᵀ D⁻¹ G` by the articulated-body algorithm, `O(n)`, for deep trees of
+    /// holonomic models ([`ArticulatedFactor`]); `M` itself is not formed.
+    Articulated(Box<ArticulatedFactor>),
     /// `M = L Lᵀ` dense (a full pattern): the factor, or the buffer before the first one.
     Dense {
         chol: Option<Cholesky<Real, Dyn>>,
@@ -98,6 +104,33 @@ enum FactorStorage {
 }
 
 impl MassFactor {
+    /// The factor that `model` uses, with the sparsity `pattern` of its mass matrix
+    /// ([`mass_pattern`]): the articulated-body one where [`articulated_pays`] says so,
+    /// else [`Self::new`].
+    pub fn for_model(model: &Model, pattern: TreePattern, allocate: bool) -> Self {
+        if model.is_holonomic() && articulated_pays(&pattern) {
+            Self::articulated(model)
+        } else {
+            Self::new(pattern, allocate)
+        }
+    }
+
+    /// The articulated-body factor of a holonomic `model` ([`ArticulatedFactor`]),
+    /// whatever its size. A nonholonomic model's speeds are not its tree's: use
+    /// [`Self::for_model`].
+    pub fn articulated(model: &Model) -> Self {
+        MassFactor {
+            storage: FactorStorage::Articulated(Box::new(ArticulatedFactor::new(model))),
+            valid: false,
+        }
+    }
+
+    /// `true` for the articulated-body factor, which [`factor_mass`] computes from the
+    /// kinematics without the mass matrix.
+    pub fn is_articulated(&self) -> bool {
+        matches!(self.storage, FactorStorage::Articulated(_))
+    }
+
     /// A factor of the sparsity `pattern`, not yet valid; its storage is allocated at the
     /// first factorization when `allocate` is false.
     pub fn new(pattern: TreePattern, allocate: bool) -> Self {
@@ -138,6 +171,7 @@ impl MassFactor {
                 let l = c.l();
                 &l * l.transpose()
             }),
+            FactorStorage::Articulated(_) => None,
         }
     }
 
@@ -174,6 +208,8 @@ impl MassFactor {
                 *chol = Cholesky::new(buf);
                 chol.is_some()
             }
+            // Factored from the kinematics (`factor_mass`), not from `m`.
+            FactorStorage::Articulated(_) => false,
         };
         if ok {
             self.valid = true;
@@ -188,14 +224,18 @@ impl MassFactor {
     /// [`Self::solve_factor_transpose_in_place`] after this. With `Y = F⁻¹ Jᵀ`,
     /// `J M⁻¹ Jᵀ = Yᵀ Y` (one triangular solve per column of `Jᵀ`, not two, and a symmetric
     /// product) and `M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ)`.
-    pub fn solve_factor_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
+    pub fn solve_factor_in_place(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
-        match &self.storage {
+        match &mut self.storage {
             FactorStorage::Tree(l) => {
                 check_len("right-hand side", l.nrows(), b.len())?;
                 l.solve_lt(b);
+            }
+            FactorStorage::Articulated(a) => {
+                check_len("right-hand side", a.nrows(), b.len())?;
+                a.solve_factor_in_place(b);
             }
             FactorStorage::Dense { chol, n, .. } => {
                 let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
@@ -209,14 +249,18 @@ impl MassFactor {
 
     /// `y ← F⁻ᵀ y`, the other half of [`Self::solve_in_place`] (see
     /// [`Self::solve_factor_in_place`]).
-    pub fn solve_factor_transpose_in_place(&self, y: &mut [Real]) -> Result<(), DynamicsError> {
+    pub fn solve_factor_transpose_in_place(&mut self, y: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
-        match &self.storage {
+        match &mut self.storage {
             FactorStorage::Tree(l) => {
                 check_len("right-hand side", l.nrows(), y.len())?;
                 l.solve_l(y);
+            }
+            FactorStorage::Articulated(a) => {
+                check_len("right-hand side", a.nrows(), y.len())?;
+                a.solve_factor_transpose_in_place(y);
             }
             FactorStorage::Dense { chol, n, .. } => {
                 let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
@@ -231,14 +275,18 @@ impl MassFactor {
 
     /// Solves `M x = b` in place (`b` becomes `x`): `Lᵀ y = b` backward, then `L x = y`
     /// forward (`L y = b`, `Lᵀ x = y` for the dense factor).
-    pub fn solve_in_place(&self, b: &mut [Real]) -> Result<(), DynamicsError> {
+    pub fn solve_in_place(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
-        match &self.storage {
+        match &mut self.storage {
             FactorStorage::Tree(l) => {
                 check_len("right-hand side", l.nrows(), b.len())?;
                 l.solve_ltl(b);
+            }
+            FactorStorage::Articulated(a) => {
+                check_len("right-hand side", a.nrows(), b.len())?;
+                a.solve_in_place(b);
             }
             FactorStorage::Dense { chol, n, .. } => {
                 let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
@@ -248,6 +296,25 @@ impl MassFactor {
         }
         Ok(())
     }
+}
+
+/// The fewest speeds for which a holonomic model whose speeds are on average at depth
+/// 4 or more (a chain of 9 links or more, a tree with long branches) is factored by the
+/// articulated-body algorithm, `O(n)`, rather than by the Cholesky factorization of `M`,
+/// `O(n³)` for a chain. Measured with `cargo bench --bench rhs -- rhs_factor`
+/// (`forward_dynamics` of an `n`-link chain with each factor, median ns): 4 links 289
+/// dense / 321 articulated, 8 links 701 / 634, 16 links 1,884 / 1,289, 32 links
+/// 5,913 / 2,557, 256 links 818,688 / 21,384.
+pub const ARTICULATED_MIN_SPEEDS: usize = 8;
+
+/// `true` if the articulated-body factor is the cheaper one for the mass-matrix sparsity
+/// `pattern`: at least [`ARTICULATED_MIN_SPEEDS`] speeds and a factor of `M` that would
+/// hold five entries per speed or more (`Σ (depth + 1) ≥ 5 n`). Free bodies and shallow
+/// trees keep the sparse `LᵀL` factor, chains of up to 8 links the dense one (and the
+/// bit-for-bit results recorded with it: `kane_double_pendulum`, `chain` at 8 links).
+pub fn articulated_pays(pattern: &TreePattern) -> bool {
+    let n = pattern.len();
+    n >= ARTICULATED_MIN_SPEEDS && pattern.entries() >= 5 * n
 }
 
 /// The largest mass matrix whose smallest eigenvalue a failed factorization reports (a
@@ -622,15 +689,11 @@ pub fn forward_dynamics_with(
         check_len("tau", model.nu(), tau.len())?;
         check_finite(t, "tau", tau)?;
     }
-    // Kinematics, M(q), h(t, q, u).
+    // Kinematics, h(t, q, u), the factor of M(q).
     update_positions(model, data, t, q)?;
     update_velocities(model, data, u)?;
-    mass_matrix(model, data);
     bias_forces(model, data);
-    // M = L Lᵀ.
-    data.mass_factor
-        .factor(&data.mass)
-        .map_err(|min_eigenvalue| DynamicsError::NotPositiveDefinite { t, min_eigenvalue })?;
+    factor_mass(model, data, t)?;
     // u̇ = M⁻¹ (τ − h).
     for r in 0..model.nu() {
         data.udot[r] = tau.map_or(0.0, |tau| tau[r]) - data.bias[r];
@@ -706,16 +769,52 @@ pub fn kinematic_equations(
     Ok((a, b))
 }
 
-/// Solves `M x = b` in place with the factor of the last [`forward_dynamics`] (`b`
-/// becomes `x`). For the impact map: `Δu = M⁻¹ Jᵀ I` [P, Eq. (16)], `W = J M⁻¹ Jᵀ`
-/// [P, Eq. (20)].
-pub fn solve_mass(data: &Data, b: &mut [Real]) -> Result<(), DynamicsError> {
+/// Solves `M x = b` in place with the factor of the last [`forward_dynamics`] or
+/// [`factor_mass`] (`b` becomes `x`). For the impact map: `Δu = M⁻¹ Jᵀ I` [P, Eq. (16)],
+/// `W = J M⁻¹ Jᵀ` [P, Eq. (20)].
+pub fn solve_mass(data: &mut Data, b: &mut [Real]) -> Result<(), DynamicsError> {
     data.mass_factor.solve_in_place(b)
 }
 
+/// Factors the mass matrix at the positions of the last [`update_positions`]: the
+/// articulated-body factor straight from the kinematics, or [`mass_matrix`] then its
+/// Cholesky factorization. `t` is reported in errors. Allocates nothing (but the evidence
+/// of a failure).
+///
+/// Writes `data.mass_factor`, and `data.mass` and `data.composite` unless the factor is
+/// the articulated-body one.
+pub fn factor_mass(model: &Model, data: &mut Data, t: Real) -> Result<(), DynamicsError> {
+    let Data {
+        mass_factor,
+        joint_frame,
+        subspace,
+        body_inertia,
+        ..
+    } = data;
+    if let FactorStorage::Articulated(a) = &mut mass_factor.storage {
+        mass_factor.valid = false;
+        if a.factor(model, joint_frame, subspace, body_inertia).is_ok() {
+            mass_factor.valid = true;
+            return Ok(());
+        }
+        // The evidence: the mass matrix's smallest eigenvalue (cold, allocating).
+        mass_matrix(model, data);
+        return Err(DynamicsError::NotPositiveDefinite {
+            t,
+            min_eigenvalue: smallest_eigenvalue(&data.mass),
+        });
+    }
+    mass_matrix(model, data);
+    factor_mass_matrix(data, t)
+}
+
 /// Factors the mass matrix already in `data.mass` (after [`mass_matrix`]) without solving
-/// the dynamics, e.g. to compute an impact at a state. `t` is reported in errors.
+/// the dynamics. `t` is reported in errors. A workspace that held the articulated-body
+/// factor gets a factor of `M` instead (allocating once); [`factor_mass`] needs no `M`.
 pub fn factor_mass_matrix(data: &mut Data, t: Real) -> Result<(), DynamicsError> {
+    if data.mass_factor.is_articulated() {
+        data.mass_factor = MassFactor::new(data.mass.pattern().clone(), true);
+    }
     data.mass_factor
         .factor(&data.mass)
         .map_err(|min_eigenvalue| DynamicsError::NotPositiveDefinite { t, min_eigenvalue })

@@ -58,6 +58,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod articulated;
 pub mod constraints;
 pub mod contact;
 pub mod dynamics;

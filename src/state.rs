@@ -179,6 +179,9 @@ impl Data {
             (nv, nu)
         };
         let pattern = mass_pattern(model);
+        // The articulated-body factor needs no mass matrix: its storage waits for a
+        // `mass_matrix` call.
+        let mass_factor = MassFactor::for_model(model, pattern.clone(), allocate);
         Data {
             time: 0.0,
             joint_q: vec![[0.0; 3]; nb],
@@ -196,12 +199,12 @@ impl Data {
             body_wrench: vec![Wrench::ZERO; nb],
             composite: vec![Inertia::ZERO; nb],
             joint_effort: vec![[0.0; 3]; nb],
-            mass: if allocate {
+            mass: if allocate && !mass_factor.is_articulated() {
                 TreeMatrix::zeros(pattern.clone())
             } else {
                 TreeMatrix::unallocated(pattern.clone())
             },
-            mass_factor: MassFactor::new(pattern, allocate),
+            mass_factor,
             bias: DVector::zeros(nu),
             udot: DVector::zeros(nu),
             tau: DVector::zeros(nu),

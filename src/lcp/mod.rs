@@ -74,6 +74,36 @@ pub struct Solution {
     pub w: DVector<Real>,
 }
 
+impl Solution {
+    /// Opens every closed contact whose normal force came out negative, `x_n < 0`: the
+    /// solvers accept a solution whose conditions hold to their tolerance, and a contact
+    /// whose force is zero in exact arithmetic can end at `x_n ≈ −1e-12 |x|` (the 32-link
+    /// chain's simultaneous impacts, `tests/all/sim_persistent.rs`). Its forces become
+    /// exactly zero (`x_n ≥ 0` holds exactly, as an impulse of Moreau's law must) and
+    /// `w = A x + b` is recomputed; the other conditions move by `A` times that rounding.
+    /// Returns the number of contacts opened.
+    pub fn open_negative_normals(
+        &mut self,
+        a: &nalgebra::DMatrix<Real>,
+        b: &DVector<Real>,
+    ) -> usize {
+        let mut opened = 0;
+        for (i, mode) in self.modes.iter_mut().enumerate() {
+            if *mode != Mode::Open && self.x[2 * i] < 0.0 {
+                *mode = Mode::Open;
+                self.x[2 * i] = 0.0;
+                self.x[2 * i + 1] = 0.0;
+                opened += 1;
+            }
+        }
+        if opened > 0 {
+            self.w.copy_from(b);
+            self.w.gemv(1.0, a, &self.x, 1.0);
+        }
+        opened
+    }
+}
+
 /// Every solution of the problem (none, one, or several).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solutions {
@@ -134,5 +164,43 @@ pub fn solutions(
             if all.is_empty() { Err(e) } else { Ok(all) }
         }
         Err(e) => Err(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    #[test]
+    fn a_negative_normal_force_opens_its_contact_and_w_follows() {
+        // Two coupled contacts, the first sliding with x_n = −1e-13 (rounding), the
+        // second sticking.
+        let a = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                2.0, 0.3, 0.5, 0.1, //
+                0.3, 1.0, 0.2, 0.4, //
+                0.5, 0.2, 3.0, 0.6, //
+                0.1, 0.4, 0.6, 1.5,
+            ],
+        );
+        let b = DVector::from_column_slice(&[1e-13, 0.2, -1.2, 0.05]);
+        let x = DVector::from_column_slice(&[-1e-13, 5e-14, 0.4, -0.03]);
+        let mut sol = Solution {
+            modes: vec![Mode::Slide(-1.0), Mode::Stick],
+            w: &a * &x + &b,
+            x,
+        };
+        assert_eq!(sol.open_negative_normals(&a, &b), 1);
+        assert_eq!(sol.modes, vec![Mode::Open, Mode::Stick]);
+        assert_eq!((sol.x[0], sol.x[1]), (0.0, 0.0));
+        assert_eq!((sol.x[2], sol.x[3]), (0.4, -0.03));
+        // w = A x + b of the new forces.
+        let w = &a * &sol.x + &b;
+        assert!((&sol.w - &w).amax() < 1e-15);
+        // Nothing left to open.
+        assert_eq!(sol.open_negative_normals(&a, &b), 0);
     }
 }

@@ -754,7 +754,7 @@ impl Simulation<'_> {
         forward_dynamics(self.model, &mut self.sampler, t, q, u).map_err(|e| e.at(t))?;
         let sel = (self.system.persistent).select(
             self.model,
-            &self.sampler,
+            &mut self.sampler,
             (t, q, u),
             candidates,
             v_slip,

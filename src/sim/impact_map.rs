@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::contact::{
     ContactFrame, FrameWorkspace, PairContact, Tangent, contact_frame, frame_at, pair_contact,
 };
-use crate::dynamics::{Energy, energy, factor_mass_matrix, mass_matrix, solve_mass};
+use crate::dynamics::{Energy, energy, factor_mass, solve_mass};
 use crate::impact::{
     self, Coefficients, CollisionType, ContactVelocity, ImpactMatrix, ImpactProblem, Impulse, Law,
     Outcome, Phases, energy_change,
@@ -323,12 +323,11 @@ impl ImpactMap {
     /// `W = J M⁻¹ Jᵀ` [P, Eq. (20)] from the rows left in `j_n`, `j_t` by the last frame,
     /// at the positions in `data`; `M⁻¹ J_nᵀ`, `M⁻¹ J_tᵀ` are left in `x_n`, `x_t`.
     fn impact_matrix_of_rows(&mut self, model: &Model, t: Real) -> Result<ImpactMatrix, SimError> {
-        mass_matrix(model, &mut self.data);
-        factor_mass_matrix(&mut self.data, t).map_err(|e| SimError::at(t, e))?;
+        factor_mass(model, &mut self.data, t).map_err(|e| SimError::at(t, e))?;
         self.x_n.copy_from_slice(&self.j_n);
         self.x_t.copy_from_slice(&self.j_t);
-        solve_mass(&self.data, &mut self.x_n).map_err(|e| SimError::at(t, e))?;
-        solve_mass(&self.data, &mut self.x_t).map_err(|e| SimError::at(t, e))?;
+        solve_mass(&mut self.data, &mut self.x_n).map_err(|e| SimError::at(t, e))?;
+        solve_mass(&mut self.data, &mut self.x_t).map_err(|e| SimError::at(t, e))?;
         let dot = |a: &[Real], b: &[Real]| a.iter().zip(b).map(|(x, y)| x * y).sum::<Real>();
         Ok(ImpactMatrix::new(
             dot(&self.j_n, &self.x_n),
@@ -491,7 +490,16 @@ impl ImpactMap {
                      Newton law: {e}"
                 ),
             })?;
-        let sol = &solutions[0];
+        // P_n ≥ 0 exactly: a force the solver left at −rounding is none.
+        let mut sol = solutions
+            .into_iter()
+            .next()
+            .ok_or_else(|| SimError::Contact {
+                t,
+                message: format!("the simultaneous impact of {k} contact points has no solution"),
+            })?;
+        sol.open_negative_normals(&set.w, &b);
+        let sol = &sol;
         let materials: Vec<Material> = points.iter().map(|p| p.2).collect();
         self.jump(
             model,
@@ -607,15 +615,14 @@ impl ImpactMap {
             v[2 * i + 1] = frame.v_t();
             frames.push(frame);
         }
-        mass_matrix(model, &mut self.data);
-        factor_mass_matrix(&mut self.data, t).map_err(|e| SimError::at(t, e))?;
+        factor_mass(model, &mut self.data, t).map_err(|e| SimError::at(t, e))?;
         let mut minv_jt = DMatrix::zeros(nu, 2 * k);
         let mut x = vec![0.0; nu];
         for col in 0..2 * k {
             x.iter_mut()
                 .zip(jac.row(col).iter())
                 .for_each(|(x, j)| *x = *j);
-            solve_mass(&self.data, &mut x).map_err(|e| SimError::at(t, e))?;
+            solve_mass(&mut self.data, &mut x).map_err(|e| SimError::at(t, e))?;
             minv_jt.column_mut(col).copy_from_slice(&x);
         }
         let w = &jac * &minv_jt;

@@ -368,7 +368,7 @@ impl Persistent {
     fn assemble(
         &mut self,
         model: &Model,
-        data: &Data,
+        data: &mut Data,
         (t, q, u): (Real, &[Real], &[Real]),
     ) -> Result<(), SimError> {
         let k = self.closed.len();
@@ -557,7 +557,7 @@ impl Persistent {
     pub fn select(
         &mut self,
         model: &Model,
-        data: &Data,
+        data: &mut Data,
         state: (Real, &[Real], &[Real]),
         candidates: &[Candidate],
         v_slip: Real,

@@ -494,14 +494,17 @@ fn the_factor_solves_mass_systems_and_reports_failures() {
     let mut data = Data::new(&model);
     let n = model.nu();
     let mut b = vec![1.0; n];
-    assert_eq!(solve_mass(&data, &mut b), Err(DynamicsError::NotFactored));
+    assert_eq!(
+        solve_mass(&mut data, &mut b),
+        Err(DynamicsError::NotFactored)
+    );
     let mut rng = Rng::new(1);
     let q = rng.vector(n, 1.0);
     let u = rng.vector(n, 1.0);
     forward_dynamics(&model, &mut data, 0.5, &q, &u).unwrap();
     let rhs = DVector::from_vec(rng.vector(n, 1.0));
     let mut x = rhs.clone();
-    solve_mass(&data, x.as_mut_slice()).unwrap();
+    solve_mass(&mut data, x.as_mut_slice()).unwrap();
     let mass = data.mass.to_dense();
     assert!((&mass * &x - &rhs).amax() < 1e-12 * (1.0 + max_abs(&mass) * x.amax()));
     // M = Lᵀ L [F, §6.5] (or L Lᵀ for a full pattern).
@@ -520,7 +523,10 @@ fn the_factor_solves_mass_systems_and_reports_failures() {
         }
     );
     assert!(err.to_string().contains("t = 1.25"));
-    assert_eq!(solve_mass(&data, &mut b), Err(DynamicsError::NotFactored));
+    assert_eq!(
+        solve_mass(&mut data, &mut b),
+        Err(DynamicsError::NotFactored)
+    );
 
     // Non-finite input is reported, not propagated.
     let mut bad = q.clone();

@@ -13,6 +13,7 @@
 mod common;
 
 mod accumulation;
+mod articulated;
 mod broad_phase;
 mod cli_impact;
 mod cli_regress;

@@ -41,7 +41,7 @@ fn the_right_hand_side_allocates_nothing() {
             forward_dynamics(model, &mut data, t, &y[..n], &y[n..]).unwrap();
             let e = kinetic_energy(model, &data) + potential_energy(model, &data);
             let p = power(model, &mut data);
-            solve_mass(&data, &mut b).unwrap();
+            solve_mass(&mut data, &mut b).unwrap();
             let x = point_world(model, &data, body, Vec2::new(0.1, 0.2)).unwrap();
             let v = point_velocity(model, &data, body, x).unwrap();
             point_jacobian(model, &data, body, x, &mut jac).unwrap();

@@ -19,7 +19,7 @@ use anyhow::Context;
 use ricochet::contact::broad::{collider_boxes, overlapping_pairs};
 use ricochet::contact::signed_gap;
 use ricochet::dynamics::Energy;
-use ricochet::dynamics::{energy, factor_mass_matrix, kinematic_equations, mass_matrix};
+use ricochet::dynamics::{energy, factor_mass, kinematic_equations, mass_matrix};
 use ricochet::math::Real;
 use ricochet::model::{Model, PairId};
 use ricochet::scene;
@@ -138,10 +138,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let mut omitted = Vec::new();
     let nu = model.nu();
     let mass = if args.full || nu <= MASS_MATRIX_MAX_SPEEDS {
-        mass_matrix(model, &mut data);
-        factor_mass_matrix(&mut data, state.t).with_context(|| {
+        factor_mass(model, &mut data, state.t).with_context(|| {
             format!("{}: mass matrix at the initial state", args.scene.display())
         })?;
+        if data.mass_factor.is_articulated() {
+            // Factored without forming M.
+            mass_matrix(model, &mut data);
+        }
         Some(
             (0..nu)
                 .map(|r| (0..nu).map(|c| data.mass[(r, c)]).collect())

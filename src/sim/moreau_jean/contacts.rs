@@ -245,7 +245,7 @@ impl ContactProblem {
     /// `w = v^{k+1} + (e v_n^k, 0)`.
     pub(super) fn assemble(
         &mut self,
-        data: &Data,
+        data: &mut Data,
         u_free: &[Real],
         t: Real,
     ) -> Result<(), SimError> {

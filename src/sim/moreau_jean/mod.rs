@@ -514,7 +514,8 @@ impl<'m> MoreauJean<'m> {
         self.counters.events +=
             self.contacts
                 .index_set(self.model, &self.data, &self.overrides, t_m)?;
-        self.contacts.assemble(&self.data, &self.scratch_u, t_m)?;
+        self.contacts
+            .assemble(&mut self.data, &self.scratch_u, t_m)?;
         let solved = self.contacts.solve();
         self.note_solver(t_m, solved, observer)?;
         // Impulses and positions: u_{k+1} = u_free + M⁻¹ Jᵀ P,
