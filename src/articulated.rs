@@ -240,9 +240,17 @@ impl ArticulatedFactor {
     }
 
     /// `b ← G b`: the backward sweep, `uᵢ = bᵢ − Sᵢᵀ pᵢ` (see the module docs).
+    ///
+    /// The joints after the last one with a non-zero entry of `b` pass nothing up (a
+    /// joint's subtree comes after it, so theirs hold no force either): the sweep starts
+    /// at that joint. A contact point's Jacobian row has entries on its body's ancestors
+    /// alone, so on a chain the sweep of a row covers the links above the point.
     fn backward(&mut self, b: &mut [Real]) {
-        self.sweep.fill(Vector3::zeros());
-        for i in (0..self.links.len()).rev() {
+        let end = (self.links.iter())
+            .rposition(|l| b[l.speed..l.speed + l.n].iter().any(|&x| x != 0.0))
+            .map_or(0, |i| i + 1);
+        self.sweep[..end].fill(Vector3::zeros());
+        for i in (0..end).rev() {
             let link = &self.links[i];
             if link.n == 0 && link.parent == ROOT {
                 continue;
