@@ -27,15 +27,15 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{AtTime, Scales, SimError};
 use crate::contact::{
-    ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent, contact_points,
-    frame_at, relative_velocity,
+    ContactError, ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent,
+    contact_points_of, frame_at, relative_velocity_of,
 };
 use crate::dynamics::coordinate_rates;
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
 use crate::linalg::{dot, fit_matrix, fit_vector};
 use crate::math::{Pose, Real, Vec2};
-use crate::model::{Model, PairId};
+use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// How a closed contact point holds.
@@ -106,9 +106,32 @@ pub fn pair_points(
     tolerance: Real,
     ws: &mut ManifoldWorkspace,
 ) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
+    let p = resolve(model, data, pair)?;
+    pair_points_of(model, data, (pair, &p), tolerance, ws)
+}
+
+/// The pair `pair` of the model (its colliders and material), or the error of an unknown
+/// one at the time of `data`.
+fn resolve(model: &Model, data: &Data, pair: PairId) -> Result<ContactPair, SimError> {
+    (model.pair(pair))
+        .ok_or(ContactError::UnknownPair { pair: pair.index() })
+        .map_err(|e| e.at(data.time))
+}
+
+/// [`pair_points`] of a pair already resolved (`model.pair(pair)`).
+fn pair_points_of(
+    model: &Model,
+    data: &Data,
+    (pair, p): (PairId, &ContactPair),
+    tolerance: Real,
+    ws: &mut ManifoldWorkspace,
+) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
     let t = data.time;
-    let points = contact_points(model, data, pair, tolerance, ws).map_err(|e| e.at(t))?;
-    let pose = body_pose_of_a(model, data, pair);
+    let points = contact_points_of(model, data, (pair, p), tolerance, ws).map_err(|e| e.at(t))?;
+    let pose = match model.colliders()[p.a.index()].body {
+        Some(b) => data.body_pose[b.index()],
+        None => Pose::IDENTITY,
+    };
     Ok(points
         .into_iter()
         .map(|c| {
@@ -116,14 +139,6 @@ pub fn pair_points(
             (c, local)
         })
         .collect())
-}
-
-fn body_pose_of_a(model: &Model, data: &Data, pair: PairId) -> Pose {
-    let a = model.pair_of(pair).a;
-    match model.colliders()[a.index()].body {
-        Some(b) => data.body_pose[b.index()],
-        None => Pose::IDENTITY,
-    }
 }
 
 /// The results of the last evaluation of the closed points' constrained dynamics
@@ -191,6 +206,8 @@ pub struct Persistent {
     /// The velocities `(v_n, v_t)` of each closed point at the four shifts of the
     /// differences.
     v_fd: Vec<[(Real, Real); 4]>,
+    /// The pair of each closed point, looked up once per evaluation of the differences.
+    pairs: Vec<ContactPair>,
     /// One column of `Y`, or `Y λ` (nu).
     column: Vec<Real>,
     /// The velocity-product terms `c` (2k).
@@ -230,6 +247,7 @@ impl Persistent {
             q_fd: vec![0.0; model.nq()],
             qdot_fd: vec![0.0; model.nq()],
             v_fd: Vec::new(),
+            pairs: Vec::new(),
             column: vec![0.0; nu],
             c: DVector::zeros(0),
             jac: DMatrix::zeros(0, nu),
@@ -331,6 +349,11 @@ impl Persistent {
             update_velocities(model, &mut self.data_fd, u).map_err(|e| e.at(t))?;
             coordinate_rates(model, &self.data_fd, u, &mut self.qdot_fd);
         }
+        // Each closed point's pair looked up once for the four shifts.
+        self.pairs.clear();
+        for c in &self.closed {
+            self.pairs.push(resolve(model, &self.data_fd, c.pair)?);
+        }
         for (shift, s) in [eps, -eps, 2.0 * eps, -2.0 * eps].into_iter().enumerate() {
             for ((qf, qi), qd) in self.q_fd.iter_mut().zip(q).zip(&self.qdot_fd) {
                 *qf = qi + s * qd;
@@ -342,7 +365,13 @@ impl Persistent {
                 let Closed { pair, local, .. } = self.closed[i];
                 self.v_fd[i][shift] = self
                     .eval
-                    .velocities(model, &self.data_fd, pair, local, self.scales.length)?
+                    .velocities_of(
+                        model,
+                        &self.data_fd,
+                        (pair, &self.pairs[i]),
+                        local,
+                        self.scales.length,
+                    )?
                     .ok_or_else(|| SimError::Contact {
                         t,
                         message: format!("closed contact point of pair #{} lost", pair.index()),
@@ -690,15 +719,28 @@ impl PointScratch {
         local: Vec2,
         prediction: Real,
     ) -> Result<Option<(Real, Real)>, SimError> {
+        let p = resolve(model, data, pair)?;
+        self.velocities_of(model, data, (pair, &p), local, prediction)
+    }
+
+    /// [`Self::velocities`] of a pair already resolved (`model.pair(pair)`).
+    fn velocities_of(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (pair, p): (PairId, &ContactPair),
+        local: Vec2,
+        prediction: Real,
+    ) -> Result<Option<(Real, Real)>, SimError> {
         let t = data.time;
-        let candidates = self.candidates(model, data, pair, prediction)?;
+        let candidates = pair_points_of(model, data, (pair, p), prediction, &mut self.manifold)?;
         let Some((c, _)) = candidates
             .into_iter()
             .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
         else {
             return Ok(None);
         };
-        let v_r = relative_velocity(model, data, pair, &c).map_err(|e| e.at(t))?;
+        let v_r = relative_velocity_of(model, data, p, &c).map_err(|e| e.at(t))?;
         let n = -c.normal;
         Ok(Some((v_r.dot(n), v_r.dot(crate::math::perp(n)))))
     }
