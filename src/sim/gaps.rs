@@ -1,7 +1,7 @@
 //! The event functions of the loop: the gaps of open contacts, and the forces and slips of
 //! closed ones.
 
-use super::persistent::{Evaluation, Hold, Persistent, PointScratch};
+use super::persistent::{Evaluation, Hold, Persistent, PointScratch, nearest_velocities};
 use super::{AtTime, Nested, Scales};
 use crate::contact::{PairContact, pair_contact};
 use crate::dynamics::forward_dynamics;
@@ -91,6 +91,12 @@ struct Here {
     closed: Vec<super::persistent::Closed>,
     /// The contact of slot 0 of each candidate (`GapFunctions::gap_contact`).
     contacts: Vec<Option<PairContact>>,
+    /// The contact points of each candidate with one closed point, with their points on
+    /// `a` in its body's frame (`PointScratch::candidates`; empty for the others): the
+    /// slip velocity of the closed point is the nearest's.
+    candidate_points: Vec<arrayvec::ArrayVec<(PairContact, Vec2), 2>>,
+    /// The contact points of the last `GapFunctions::other_point`.
+    points: arrayvec::ArrayVec<(PairContact, Vec2), 2>,
 }
 
 impl Here {
@@ -305,6 +311,7 @@ impl<'m> GapFunctions<'m> {
         here.qu.reserve(nqu.saturating_sub(here.qu.len()));
         (here.candidates).reserve(pairs.saturating_sub(here.candidates.len()));
         (here.contacts).reserve(pairs.saturating_sub(here.contacts.len()));
+        (here.candidate_points).reserve(pairs.saturating_sub(here.candidate_points.len()));
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -364,6 +371,7 @@ impl GapFunctions<'_> {
         let candidates =
             self.scratch
                 .candidates(self.model, &self.data, pair, self.scales.length)?;
+        self.here.points = candidates.clone();
         Ok(match candidates.as_slice() {
             [x, y] if (x.1 - local).length() <= (y.1 - local).length() => Some(y.0),
             [x, _] => Some(x.0),
@@ -403,14 +411,17 @@ impl GapFunctions<'_> {
         self.here.valid = false;
         let mut contacts = std::mem::take(&mut self.here.contacts);
         contacts.clear();
+        self.here.candidate_points.clear();
         for r in 0..self.candidates.len() {
             let pair = self.candidates[r];
             let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
                 Ok(k) => self.disarmed[k].1,
                 Err(_) => 0.0,
             };
+            self.here.points.clear();
             let contact = self.gap_contact(pair, t)?;
             contacts.push(contact);
+            self.here.candidate_points.push(self.here.points.clone());
             g[SLOTS * r] = contact.map_or(self.scales.length, |c| c.gap) - floor;
         }
         self.here.contacts = contacts;
@@ -538,13 +549,23 @@ impl GapFunctions<'_> {
             g[at + 2 + 3 * j] = match c.hold {
                 Hold::Stick => lo[1],
                 Hold::Slide(s) => {
-                    let v = self.scratch.velocities(
-                        model,
-                        &self.data,
-                        c.pair,
-                        c.local,
-                        self.scales.length,
-                    )?;
+                    // The pair's contact points found for its gap (its only closed
+                    // point), or a query.
+                    let points = (self.candidates.binary_search(&c.pair).ok())
+                        .map(|r| &self.here.candidate_points[r])
+                        .filter(|points| !points.is_empty());
+                    let v = if let Some(points) = points {
+                        let p = model.pair_of(c.pair);
+                        nearest_velocities(model, &self.data, &p, points, c.local)?
+                    } else {
+                        self.scratch.velocities(
+                            model,
+                            &self.data,
+                            c.pair,
+                            c.local,
+                            self.scales.length,
+                        )?
+                    };
                     let (_, v_t) = v.ok_or_else(|| {
                         Nested::from(super::SimError::Contact {
                             t,

@@ -765,6 +765,27 @@ pub struct Selection {
     pub painleve: Vec<Real>,
 }
 
+/// The velocities `(v_n, v_t)` of [`PointScratch::velocities`] from the pair's contact
+/// points `candidates` (of [`PointScratch::candidates`] at the state of `data`): those of
+/// the one nearest `local`, `None` if there is none.
+pub(crate) fn nearest_velocities(
+    model: &Model,
+    data: &Data,
+    p: &ContactPair,
+    candidates: &[(PairContact, Vec2)],
+    local: Vec2,
+) -> Result<Option<(Real, Real)>, SimError> {
+    let Some((c, _)) = candidates
+        .iter()
+        .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
+    else {
+        return Ok(None);
+    };
+    let v_r = relative_velocity_of(model, data, p, c).map_err(|e| e.at(data.time))?;
+    let n = -c.normal;
+    Ok(Some((v_r.dot(n), v_r.dot(perp(n)))))
+}
+
 /// Scratch to evaluate one contact point: the manifold, the frame and its rows.
 pub struct PointScratch {
     manifold: ManifoldWorkspace,
@@ -821,17 +842,8 @@ impl PointScratch {
         local: Vec2,
         prediction: Real,
     ) -> Result<Option<(Real, Real)>, SimError> {
-        let t = data.time;
         let candidates = pair_points_of(model, data, (pair, p), prediction, &mut self.manifold)?;
-        let Some((c, _)) = candidates
-            .into_iter()
-            .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
-        else {
-            return Ok(None);
-        };
-        let v_r = relative_velocity_of(model, data, p, &c).map_err(|e| e.at(t))?;
-        let n = -c.normal;
-        Ok(Some((v_r.dot(n), v_r.dot(crate::math::perp(n)))))
+        nearest_velocities(model, data, p, &candidates, local)
     }
 
     /// The point of `pair` nearest `local` (a point on `a` in its body's frame) at the state
