@@ -326,6 +326,50 @@ pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
     }
 }
 
+/// The spatial acceleration of each body at `u̇ = 0`, into `out` `[nbody]` (rad/s², m/s²):
+/// the velocity-product part with the prescribed coordinates' accelerations, the forward
+/// pass of the recursive Newton–Euler algorithm [F, §5.3] with the free `q̈` set to zero,
+///
+/// ```text
+/// A_b = P_b A_parent + c_b + Σ_k S_k q̈_p,k
+/// ```
+///
+/// (`P_b` the projection of an absolute revolute joint, the identity otherwise). For a
+/// holonomic model it is `d/dt (J u)` at fixed `u`, what a closed contact point adds to
+/// `J u̇` ([`point_acceleration`]). Requires [`update_velocities`].
+pub fn velocity_product_accelerations(model: &Model, data: &Data, out: &mut [Twist]) {
+    for (i, joint) in model.joints().iter().enumerate() {
+        let mut a = match joint.parent {
+            Some(p) => out[p.index()],
+            None => Twist::ZERO,
+        };
+        if joint.is_absolute() {
+            a = a.projected_at(data.joint_frame[i].translation);
+        }
+        a += data.body_accel_vp[i];
+        let (s, qdd) = (&data.subspace[i], &data.joint_qdd_prescribed[i]);
+        for (s_k, qdd_k) in s.iter().zip(qdd).take(joint.kind.ndof()) {
+            a += *s_k * *qdd_k;
+        }
+        out[i] = a;
+    }
+}
+
+/// The acceleration (m/s², world frame) of the material point of `body` at the world
+/// position `p`, from its spatial acceleration `accel` (e.g. of
+/// [`velocity_product_accelerations`]): the classical acceleration of a point carried by
+/// the body [F, ch. 2],
+///
+/// ```text
+/// a_p = A.v + A.ω perp(p) + ω perp(v_p),   v_p = v_O + ω perp(p)
+/// ```
+///
+/// Requires [`update_velocities`].
+pub fn point_acceleration(data: &Data, body: BodyId, p: Vec2, accel: Twist) -> Vec2 {
+    let v = data.body_twist[body.index()];
+    accel.velocity_at(p) + perp(v.velocity_at(p)) * v.w
+}
+
 /// [`update_positions`] then [`update_velocities`].
 pub fn forward_kinematics(
     model: &Model,

@@ -157,6 +157,94 @@ impl MinNorm {
         x: &mut DVector<Real>,
         rel_tol: Real,
     ) -> usize {
+        if a.shape() == (2, 2)
+            && let Some(rank) = self.solve_to_2x2(a, b, x, rel_tol)
+        {
+            return rank;
+        }
+        self.solve_general(a, b, x, rel_tol)
+    }
+
+    /// [`Self::solve_to`] of a `2 × 2` system of full rank (one closed contact point's
+    /// modes), on the stack: the same operations in the same order as the general path
+    /// (the pivoted Householder QR, then the back substitution `R₁₁ z = Qᵀ b`), so the
+    /// same numbers to the bit (the test `the_2x2_path_is_the_general_path_to_the_bit`),
+    /// without its buffers and loops. `None`, with nothing written, when the rank test
+    /// leaves a column out: the general path then solves.
+    fn solve_to_2x2(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        x: &mut DVector<Real>,
+        rel_tol: Real,
+    ) -> Option<usize> {
+        let mut col = [[a[(0, 0)], a[(1, 0)]], [a[(0, 1)], a[(1, 1)]]];
+        let mut c = [b[0], b[1]];
+        let mut perm = [0, 1];
+        let first = (0..2)
+            .map(|j| dot(&col[j], &col[j]).sqrt())
+            .fold(0.0, Real::max);
+        let rounding = 2.0 * Real::EPSILON * first;
+        let tol = rounding.max(rel_tol * first);
+        // k = 0: the pivot column, its reflection applied to the other column and to c.
+        let mut best = (0, -1.0);
+        for (j, cj) in col.iter().enumerate() {
+            let s = dot(cj, cj);
+            if s > best.1 {
+                best = (j, s);
+            }
+        }
+        if best.1.sqrt() <= tol {
+            return None;
+        }
+        col.swap(0, best.0);
+        perm.swap(0, best.0);
+        let (alpha, v0, beta) = householder(col[0].iter().copied());
+        let v = [col[0][1]];
+        let f = beta * (v0 * col[1][0] + dot(&v, &col[1][1..]));
+        col[1][0] -= f * v0;
+        col[1][1] -= f * v[0];
+        let f = beta * (v0 * c[0] + dot(&v, &c[1..]));
+        c[0] -= f * v0;
+        c[1] -= f * v[0];
+        col[0][0] = alpha;
+        // k = 1: the remaining entry.
+        let mut best = (1, -1.0);
+        let s = dot(&col[1][1..], &col[1][1..]);
+        if s > best.1 {
+            best = (1, s);
+        }
+        if best.1.sqrt() <= tol {
+            return None;
+        }
+        let (alpha, v0, beta) = householder(col[1][1..].iter().copied());
+        let f = beta * (v0 * c[1] + dot(&[], &[]));
+        c[1] -= f * v0;
+        col[1][1] = alpha;
+        // R₁₁ z = c, R[(i, j)] = col[j][i].
+        let mut z = [0.0; 2];
+        for i in (0..2).rev() {
+            let s: Real = (i + 1..2).map(|j| col[j][i] * z[j]).sum();
+            z[i] = (c[i] - s) / col[i][i];
+        }
+        if x.len() != 2 {
+            *x = DVector::zeros(2);
+        }
+        for (j, &p) in perm.iter().enumerate() {
+            x[p] = z[j];
+        }
+        self.truncated = false;
+        Some(2)
+    }
+
+    /// [`Self::solve_to`] of any shape.
+    fn solve_general(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        x: &mut DVector<Real>,
+        rel_tol: Real,
+    ) -> usize {
         let (m, n) = a.shape();
         debug_assert_eq!(b.len(), m);
         fit_matrix(&mut self.r, m, n);
@@ -275,6 +363,57 @@ mod tests {
     /// An orthogonal matrix: the Q of a random matrix.
     fn orthogonal(rng: &mut Lcg, n: usize) -> DMatrix<Real> {
         rng.matrix(n, n).qr().q()
+    }
+
+    /// The `2 × 2` path gives the general path's numbers to the bit: its solution, rank
+    /// and truncation, on random systems of spread scales, nearly dependent columns and
+    /// exactly dependent ones (which it hands to the general path), at both rank
+    /// thresholds.
+    #[test]
+    fn the_2x2_path_is_the_general_path_to_the_bit() {
+        let mut rng = Lcg(11);
+        let (mut fast, mut general) = (MinNorm::new(), MinNorm::new());
+        let mut solved_fast = 0;
+        for case in 0..20_000 {
+            let mut a = rng.matrix(2, 2);
+            let scale = 10f64.powi((case % 13) as i32 - 6);
+            a *= scale;
+            match case % 5 {
+                // Nearly dependent columns, at relative distances 1e-4 .. 1e-14.
+                1 => {
+                    let d = 10f64.powi(-4 - (case % 11) as i32);
+                    let (c0, c1) = (a[(0, 0)], a[(1, 0)]);
+                    a[(0, 1)] = 2.0 * c0 * (1.0 + d * rng.next());
+                    a[(1, 1)] = 2.0 * c1;
+                }
+                // Exactly dependent, or a zero column.
+                2 => {
+                    a[(0, 1)] = -3.0 * a[(0, 0)];
+                    a[(1, 1)] = -3.0 * a[(1, 0)];
+                }
+                3 => {
+                    a[(0, case % 2)] = 0.0;
+                    a[(1, case % 2)] = 0.0;
+                }
+                _ => {}
+            }
+            let b = DVector::from_fn(2, |_, _| rng.next() * scale);
+            let rel_tol = if case % 2 == 0 { 0.0 } else { 1e-10 };
+            let (mut x1, mut x2) = (DVector::zeros(2), DVector::zeros(2));
+            let fast_rank = fast.solve_to_2x2(&a, &b, &mut x1, rel_tol);
+            let r1 = fast.solve_to(&a, &b, &mut x1, rel_tol);
+            let r2 = general.solve_general(&a, &b, &mut x2, rel_tol);
+            solved_fast += usize::from(fast_rank.is_some());
+            assert_eq!(r1, r2, "{a} {b}");
+            assert_eq!(fast.truncated(), general.truncated(), "{a} {b}");
+            for (u, v) in x1.iter().zip(x2.iter()) {
+                assert_eq!(u.to_bits(), v.to_bits(), "{a} {b}: {x1} vs {x2}");
+            }
+        }
+        assert!(
+            solved_fast > 10_000,
+            "only {solved_fast} systems on the 2x2 path"
+        );
     }
 
     #[test]

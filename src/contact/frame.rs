@@ -6,7 +6,7 @@ use nalgebra::Matrix2xX;
 use super::gap::{ContactError, PairContact, pair_contact};
 use crate::kinematics::{point_jacobian, point_velocity};
 use crate::math::{Real, Vec2, perp};
-use crate::model::{ColliderId, Model, PairId};
+use crate::model::{ColliderId, ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// The contact frame of a pair: where the shapes touch, the normal `n` and tangent `t`,
@@ -174,6 +174,16 @@ pub fn relative_velocity(
     let p = model
         .pair(pair)
         .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
+    relative_velocity_of(model, data, &p, contact)
+}
+
+/// [`relative_velocity`] of a pair already resolved (`model.pair(pair)`).
+pub fn relative_velocity_of(
+    model: &Model,
+    data: &Data,
+    p: &ContactPair,
+    contact: &PairContact,
+) -> Result<Vec2, ContactError> {
     let v = |collider: ColliderId, at: Vec2| match model.colliders()[collider.index()].body {
         Some(body) => point_velocity(model, data, body, at).map(|v| v.total),
         None => Ok(Vec2::ZERO),

@@ -9,7 +9,7 @@ use parry2d_f64::query::{
 use super::gap::{ContactError, PairContact, pair_contact};
 use crate::kinematics::collider_pose;
 use crate::math::{Real, perp};
-use crate::model::{Model, PairId};
+use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// The most contact points of one pair in the plane: two (the ends of a flat contact).
@@ -42,6 +42,19 @@ pub fn contact_points(
     let p = model
         .pair(pair)
         .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
+    contact_points_of(model, data, (pair, &p), tolerance, ws)
+}
+
+/// [`contact_points`] of a pair already resolved (`model.pair(pair)`): the callers that
+/// query one pair many times (the central differences of the persistent contact's
+/// velocity products, five queries per right-hand side) look its colliders up once.
+pub fn contact_points_of(
+    model: &Model,
+    data: &Data,
+    (pair, p): (PairId, &ContactPair),
+    tolerance: Real,
+    ws: &mut ManifoldWorkspace,
+) -> Result<ContactPoints, ContactError> {
     let (ca, cb) = (
         &model.colliders()[p.a.index()],
         &model.colliders()[p.b.index()],

@@ -17,6 +17,9 @@ pub mod query;
 
 pub use frame::{
     ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at, relative_velocity,
+    relative_velocity_of,
 };
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
-pub use manifold::{ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points};
+pub use manifold::{
+    ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points, contact_points_of,
+};

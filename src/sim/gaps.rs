@@ -1,9 +1,9 @@
 //! The event functions of the loop: the gaps of open contacts, and the forces and slips of
 //! closed ones.
 
-use super::persistent::{Evaluation, Hold, Persistent, PointScratch};
+use super::persistent::{Evaluation, Hold, Persistent, PointScratch, nearest_velocities};
 use super::{AtTime, Nested, Scales};
-use crate::contact::{PairContact, pair_contact, signed_gap};
+use crate::contact::{PairContact, pair_contact};
 use crate::dynamics::forward_dynamics;
 use crate::events::EventFunctions;
 use crate::kinematics::{point_velocity, update_positions, update_velocities};
@@ -67,6 +67,47 @@ pub struct GapFunctions<'m> {
     /// The right-hand side's evaluation of the closed points at the end of the step, if
     /// it has one (see [`Self::take_end_evaluation`]).
     end: Evaluation,
+    /// What `self.data` holds, with the gaps' contacts found there (see [`Here`]).
+    here: Here,
+}
+
+/// The state whose kinematics `GapFunctions::data` holds after the values of a sample, with
+/// the contact of each candidate's slot 0 there: the locator asks for the rates at the
+/// same sample (every sample, with the extremum search), which then take the positions,
+/// velocities and contacts as they are instead of computing them again (two kinematics
+/// passes and a contact query per candidate). The same numbers. Every other change of
+/// `data` forgets it.
+#[derive(Default)]
+struct Here {
+    /// Whether it describes `data`.
+    valid: bool,
+    t: Real,
+    /// `[q; u]`: `data` holds the positions of `q`, and the velocities of `u` if
+    /// `velocities`.
+    qu: Vec<Real>,
+    velocities: bool,
+    /// The candidates and closed points the contacts were found for.
+    candidates: Vec<PairId>,
+    closed: Vec<super::persistent::Closed>,
+    /// The contact of slot 0 of each candidate (`GapFunctions::gap_contact`).
+    contacts: Vec<Option<PairContact>>,
+    /// The contact points of each candidate with one closed point, with their points on
+    /// `a` in its body's frame (`PointScratch::candidates`; empty for the others): the
+    /// slip velocity of the closed point is the nearest's.
+    candidate_points: Vec<arrayvec::ArrayVec<(PairContact, Vec2), 2>>,
+    /// The contact points of the last `GapFunctions::other_point`.
+    points: arrayvec::ArrayVec<(PairContact, Vec2), 2>,
+}
+
+impl Here {
+    /// Whether `data` holds the positions of `(t, q)` (`q = qu[..n]`), with these contacts.
+    fn holds(&self, fns: &GapFunctions<'_>, t: Real, q: &[Real]) -> bool {
+        self.valid
+            && self.t == t
+            && self.qu.get(..q.len()) == Some(q)
+            && self.candidates == fns.candidates
+            && self.closed == fns.persistent.closed()
+    }
 }
 
 /// Stand-ins for the force functions of the closed points at the interior samples of a
@@ -189,6 +230,7 @@ impl<'m> GapFunctions<'m> {
             memo: Memo::default(),
             stand_ins: StandIns::default(),
             end: Evaluation::default(),
+            here: Here::default(),
         }
     }
 
@@ -210,6 +252,7 @@ impl<'m> GapFunctions<'m> {
     /// their evaluations ([`Persistent::set`]).
     pub fn set_closed(&mut self, closed: Vec<super::Closed>, mu: Vec<Real>) {
         let k = closed.len();
+        (self.here.closed).reserve(k.saturating_sub(self.here.closed.len()));
         self.persistent.set(closed, mu);
         self.end.fit(k, self.model.nq() + self.model.nu());
     }
@@ -263,6 +306,12 @@ impl<'m> GapFunctions<'m> {
         memo.candidates
             .reserve(pairs.saturating_sub(memo.candidates.len()));
         memo.g.reserve((SLOTS * pairs).saturating_sub(memo.g.len()));
+        let here = &mut self.here;
+        let nqu = self.model.nq() + self.model.nu();
+        here.qu.reserve(nqu.saturating_sub(here.qu.len()));
+        (here.candidates).reserve(pairs.saturating_sub(here.candidates.len()));
+        (here.contacts).reserve(pairs.saturating_sub(here.contacts.len()));
+        (here.candidate_points).reserve(pairs.saturating_sub(here.candidate_points.len()));
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -296,6 +345,7 @@ impl GapFunctions<'_> {
     /// the gap at the pair's other point (m); see [`slot`].
     pub fn open_gap(&mut self, pair: PairId, t: Real, y: &[Real]) -> Result<Real, Nested> {
         let n = self.model.nq();
+        self.here.valid = false;
         update_positions(self.model, &mut self.data, t, &y[..n])
             .map_err(|e| Nested::from(e.at(t)))?;
         self.open_gap_here(pair, t)
@@ -305,6 +355,7 @@ impl GapFunctions<'_> {
     /// for the gaps of many pairs).
     pub fn set_positions(&mut self, t: Real, y: &[Real]) -> Result<(), Nested> {
         let n = self.model.nq();
+        self.here.valid = false;
         update_positions(self.model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))
     }
 
@@ -320,6 +371,7 @@ impl GapFunctions<'_> {
         let candidates =
             self.scratch
                 .candidates(self.model, &self.data, pair, self.scales.length)?;
+        self.here.points = candidates.clone();
         Ok(match candidates.as_slice() {
             [x, y] if (x.1 - local).length() <= (y.1 - local).length() => Some(y.0),
             [x, _] => Some(x.0),
@@ -329,35 +381,67 @@ impl GapFunctions<'_> {
 
     /// [`Self::open_gap`] at the positions of `self.data`.
     fn open_gap_here(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
+        Ok(self
+            .gap_contact(pair, t)?
+            .map_or(self.scales.length, |c| c.gap))
+    }
+
+    /// The contact whose gap is slot 0 of `pair`, at the positions of `self.data`: the
+    /// pair's closest features with no closed point, its other point with one, none with
+    /// two (or when it has no such point).
+    fn gap_contact(&mut self, pair: PairId, t: Real) -> Result<Option<PairContact>, Nested> {
         let model = self.model;
         let closed = self.persistent.closed();
         let mut on_pair = closed.iter().filter(|c| c.pair == pair);
         let (first, second) = (on_pair.next().map(|c| c.local), on_pair.next());
-        Ok(match (first, second) {
-            (None, _) => signed_gap(model, &self.data, pair, Real::INFINITY)
-                .map_err(|e| Nested::from(e.at(t)))?
-                .unwrap_or(self.scales.length),
-            (Some(local), None) => match self.other_point(pair, local)? {
-                Some(c) => c.gap,
-                None => self.scales.length,
-            },
-            (Some(_), Some(_)) => self.scales.length,
-        })
+        match (first, second) {
+            (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
+                .map_err(|e| Nested::from(e.at(t))),
+            (Some(local), None) => self.other_point(pair, local),
+            (Some(_), Some(_)) => Ok(None),
+        }
     }
 }
 
 impl GapFunctions<'_> {
-    /// Slot 0 of every candidate (the gaps), at the positions of `self.data`.
+    /// Slot 0 of every candidate (the gaps), at the positions of `self.data`; their
+    /// contacts into `self.here`, for the rates of the same sample: the caller describes
+    /// the state with [`Self::keep_here`].
     fn gap_slots(&mut self, t: Real, g: &mut [Real]) -> Result<(), Nested> {
+        self.here.valid = false;
+        let mut contacts = std::mem::take(&mut self.here.contacts);
+        contacts.clear();
+        self.here.candidate_points.clear();
         for r in 0..self.candidates.len() {
             let pair = self.candidates[r];
             let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
                 Ok(k) => self.disarmed[k].1,
                 Err(_) => 0.0,
             };
-            g[SLOTS * r] = self.open_gap_here(pair, t)? - floor;
+            self.here.points.clear();
+            let contact = self.gap_contact(pair, t)?;
+            contacts.push(contact);
+            self.here.candidate_points.push(self.here.points.clone());
+            g[SLOTS * r] = contact.map_or(self.scales.length, |c| c.gap) - floor;
         }
+        self.here.contacts = contacts;
         Ok(())
+    }
+
+    /// Marks `self.data` as holding the positions at `(t, y)`, and the velocities if
+    /// `velocities`, with the contacts of the last [`Self::gap_slots`] (see [`Here`]).
+    fn keep_here(&mut self, t: Real, y: &[Real], velocities: bool) {
+        let nqu = self.model.nq() + self.model.nu();
+        let here = &mut self.here;
+        here.t = t;
+        here.qu.clear();
+        here.qu.extend_from_slice(&y[..nqu]);
+        here.velocities = velocities;
+        here.candidates.clear();
+        here.candidates.extend_from_slice(&self.candidates);
+        here.closed.clear();
+        here.closed.extend_from_slice(self.persistent.closed());
+        here.valid = true;
     }
 
     /// [`EventFunctions::values`], computed.
@@ -368,7 +452,10 @@ impl GapFunctions<'_> {
         // Unarmed functions hold a positive value.
         g.fill(self.scales.length);
         let taken = self.persistent.can_take(&self.end, (t, q, u));
-        if self.persistent.closed().is_empty() || taken {
+        // Positions alone, or the forward dynamics (positions and velocities).
+        let positions_only = self.persistent.closed().is_empty() || taken;
+        self.here.valid = false;
+        if positions_only {
             update_positions(model, &mut self.data, t, q).map_err(|e| Nested::from(e.at(t)))?;
             if taken {
                 // The right-hand side's evaluation of this very state (see
@@ -383,6 +470,7 @@ impl GapFunctions<'_> {
                 .accelerate(model, &mut self.data, (t, q, u))?;
         }
         self.gap_slots(t, g)?;
+        self.keep_here(t, y, !positions_only);
         for i in 0..self.persistent.closed().len() {
             let c = self.persistent.closed()[i];
             let j = rank(&self.persistent, i);
@@ -447,9 +535,11 @@ impl GapFunctions<'_> {
         let model = self.model;
         let (n, nqu) = (model.nq(), model.nq() + model.nu());
         g.fill(self.scales.length);
+        self.here.valid = false;
         update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
         update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
         self.gap_slots(t, g)?;
+        self.keep_here(t, y, true);
         for i in 0..self.persistent.closed().len() {
             let c = self.persistent.closed()[i];
             let j = rank(&self.persistent, i);
@@ -459,13 +549,23 @@ impl GapFunctions<'_> {
             g[at + 2 + 3 * j] = match c.hold {
                 Hold::Stick => lo[1],
                 Hold::Slide(s) => {
-                    let v = self.scratch.velocities(
-                        model,
-                        &self.data,
-                        c.pair,
-                        c.local,
-                        self.scales.length,
-                    )?;
+                    // The pair's contact points found for its gap (its only closed
+                    // point), or a query.
+                    let points = (self.candidates.binary_search(&c.pair).ok())
+                        .map(|r| &self.here.candidate_points[r])
+                        .filter(|points| !points.is_empty());
+                    let v = if let Some(points) = points {
+                        let p = model.pair_of(c.pair);
+                        nearest_velocities(model, &self.data, &p, points, c.local)?
+                    } else {
+                        self.scratch.velocities(
+                            model,
+                            &self.data,
+                            c.pair,
+                            c.local,
+                            self.scales.length,
+                        )?
+                    };
                     let (_, v_t) = v.ok_or_else(|| {
                         Nested::from(super::SimError::Contact {
                             t,
@@ -533,6 +633,7 @@ impl EventFunctions for GapFunctions<'_> {
             return Ok(g[i]);
         }
         let n = self.model.nq();
+        self.here.valid = false;
         update_positions(self.model, &mut self.data, t, &y[..n])
             .map_err(|e| Nested::from(e.at(t)))?;
         let pair = self.candidates[i / SLOTS];
@@ -557,9 +658,12 @@ impl EventFunctions for GapFunctions<'_> {
         }
         let model = self.model;
         let (n, nqu) = (model.nq(), model.nq() + model.nu());
+        self.here.valid = false;
         update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
         update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
-        self.gap_rate(self.candidates[i / SLOTS], t).map(Some)
+        let contact = self.gap_contact(self.candidates[i / SLOTS], t)?;
+        self.gap_rate(self.candidates[i / SLOTS], contact, t)
+            .map(Some)
     }
 
     fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
@@ -586,29 +690,46 @@ impl EventFunctions for GapFunctions<'_> {
         // take a difference of the constrained dynamics at every search iteration).
         let model = self.model;
         let (n, nqu) = (model.nq(), model.nq() + model.nu());
-        update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
-        update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
+        // The kinematics and contacts of the values at this sample, if `data` holds them.
+        let here = self.here.holds(self, t, &y[..n]);
+        if !here {
+            self.here.valid = false;
+            update_positions(model, &mut self.data, t, &y[..n])
+                .map_err(|e| Nested::from(e.at(t)))?;
+        }
+        if !(here && self.here.velocities && self.here.qu[n..] == y[n..nqu]) {
+            update_velocities(model, &mut self.data, &y[n..nqu])
+                .map_err(|e| Nested::from(e.at(t)))?;
+            if here {
+                self.here.velocities = true;
+                self.here.qu.truncate(n);
+                self.here.qu.extend_from_slice(&y[n..nqu]);
+            }
+        }
         g_dot.fill(0.0);
         for r in 0..self.candidates.len() {
-            g_dot[SLOTS * r] = self.gap_rate(self.candidates[r], t)?;
+            let pair = self.candidates[r];
+            let contact = if here {
+                self.here.contacts[r]
+            } else {
+                self.gap_contact(pair, t)?
+            };
+            g_dot[SLOTS * r] = self.gap_rate(pair, contact, t)?;
         }
         Ok(true)
     }
 }
 
 impl GapFunctions<'_> {
-    /// The rate of the gap of `pair` (slot 0): the normal relative velocity of its
-    /// points, at the positions and velocities of `self.data`.
-    fn gap_rate(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
+    /// The rate of the gap of `pair` (slot 0): the normal relative velocity of the points
+    /// of its `contact` ([`Self::gap_contact`]), at the velocities of `self.data`.
+    fn gap_rate(
+        &self,
+        pair: PairId,
+        contact: Option<PairContact>,
+        t: Real,
+    ) -> Result<Real, Nested> {
         let model = self.model;
-        let closed = self.persistent.closed();
-        let mut on_pair = closed.iter().filter(|c| c.pair == pair);
-        let contact = match (on_pair.next().map(|c| c.local), on_pair.next()) {
-            (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
-                .map_err(|e| Nested::from(e.at(t)))?,
-            (Some(local), None) => self.other_point(pair, local)?,
-            (Some(_), Some(_)) => None,
-        };
         Ok(match contact {
             Some(c) => {
                 let p = model.pair_of(pair);

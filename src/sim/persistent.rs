@@ -17,25 +17,31 @@
 //! `a_n = dV_n/dt = J_n u̇ + c_n` with `c_n = ∂V_n/∂t + (∂V_n/∂q) u`, computed by a central
 //! difference along the motion, `c_n ≈ [V_n(t+ε, q+εu, u) − V_n(t−ε, q−εu, u)] / (2ε)`
 //! (the same for `c_t`): it holds the curvature of both surfaces and the turning of `n`
-//! whatever the shapes. With `A = J M⁻¹ Jᵀ` and `b = J M⁻¹ (τ − h) + c`, the forces
+//! whatever the shapes. A vertex on a fixed half-space (a pendulum's tip, a block's corner
+//! on the floor) has neither, and takes `c` exactly: `c_n = n·a_P`, `c_t = t·a_P`, with
+//! `a_P` the acceleration of the material point at `u̇ = 0`. With `A = J M⁻¹ Jᵀ` and `b = J M⁻¹ (τ − h) + c`, the forces
 //! solve the equations of the modes ([`crate::lcp::forces`]); the modes themselves come
 //! from the complementarity problem `a = A λ + b` ([`crate::lcp::solutions`]: every
 //! solution of a few points by enumeration, Lemke's one beyond), whose lack of solution or
 //! multiple solutions is Painlevé's paradox.
 
 use nalgebra::{DMatrix, DVector};
+use parry2d_f64::shape::ShapeType;
 
 use super::{AtTime, Scales, SimError};
 use crate::contact::{
-    ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent, contact_points,
-    frame_at, relative_velocity,
+    ContactError, ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent,
+    contact_points_of, frame_at, relative_velocity_of,
 };
 use crate::dynamics::coordinate_rates;
-use crate::kinematics::{update_positions, update_velocities};
+use crate::kinematics::{
+    point_acceleration, update_positions, update_velocities, velocity_product_accelerations,
+};
 use crate::lcp::{self, Allowed, Mode};
 use crate::linalg::{dot, fit_matrix, fit_vector};
-use crate::math::{Pose, Real, Vec2};
-use crate::model::{Model, PairId};
+use crate::math::{Pose, Real, Vec2, perp};
+use crate::model::spatial::Twist;
+use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// How a closed contact point holds.
@@ -106,9 +112,51 @@ pub fn pair_points(
     tolerance: Real,
     ws: &mut ManifoldWorkspace,
 ) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
+    let p = resolve(model, data, pair)?;
+    pair_points_of(model, data, (pair, &p), tolerance, ws)
+}
+
+/// The pair `pair` of the model (its colliders and material), or the error of an unknown
+/// one at the time of `data`.
+fn resolve(model: &Model, data: &Data, pair: PairId) -> Result<ContactPair, SimError> {
+    (model.pair(pair))
+        .ok_or(ContactError::UnknownPair { pair: pair.index() })
+        .map_err(|e| e.at(data.time))
+}
+
+/// The outward normal `n` (world frame) of the half-space of pair `p` when its contact
+/// points are vertices of a polygonal shape of a body (a segment, a box, a convex polygon
+/// or a triangle: no rounded border) on a half-space of the world: parry's manifold of such
+/// a pair holds vertices of `a` (material points of its body) and the fixed normal of `b`.
+fn vertex_on_fixed_plane(model: &Model, p: &ContactPair) -> Option<Vec2> {
+    let (ca, cb) = (
+        &model.colliders()[p.a.index()],
+        &model.colliders()[p.b.index()],
+    );
+    let polygonal = matches!(
+        ca.shape.shape_type(),
+        ShapeType::Segment | ShapeType::Cuboid | ShapeType::ConvexPolygon | ShapeType::Triangle
+    );
+    match (ca.body, cb.body, cb.shape.as_halfspace()) {
+        (Some(_), None, Some(h)) if polygonal => Some(cb.pose.rotation * h.normal),
+        _ => None,
+    }
+}
+
+/// [`pair_points`] of a pair already resolved (`model.pair(pair)`).
+fn pair_points_of(
+    model: &Model,
+    data: &Data,
+    (pair, p): (PairId, &ContactPair),
+    tolerance: Real,
+    ws: &mut ManifoldWorkspace,
+) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
     let t = data.time;
-    let points = contact_points(model, data, pair, tolerance, ws).map_err(|e| e.at(t))?;
-    let pose = body_pose_of_a(model, data, pair);
+    let points = contact_points_of(model, data, (pair, p), tolerance, ws).map_err(|e| e.at(t))?;
+    let pose = match model.colliders()[p.a.index()].body {
+        Some(b) => data.body_pose[b.index()],
+        None => Pose::IDENTITY,
+    };
     Ok(points
         .into_iter()
         .map(|c| {
@@ -116,14 +164,6 @@ pub fn pair_points(
             (c, local)
         })
         .collect())
-}
-
-fn body_pose_of_a(model: &Model, data: &Data, pair: PairId) -> Pose {
-    let a = model.pair_of(pair).a;
-    match model.colliders()[a.index()].body {
-        Some(b) => data.body_pose[b.index()],
-        None => Pose::IDENTITY,
-    }
 }
 
 /// The results of the last evaluation of the closed points' constrained dynamics
@@ -191,6 +231,17 @@ pub struct Persistent {
     /// The velocities `(v_n, v_t)` of each closed point at the four shifts of the
     /// differences.
     v_fd: Vec<[(Real, Real); 4]>,
+    /// The pair of each closed point, looked up once per evaluation of the velocity
+    /// products.
+    pairs: Vec<ContactPair>,
+    /// The normals `n` (world frame) of the half-spaces of closed points that are vertices
+    /// on them ([`vertex_on_fixed_plane`]).
+    planes: Vec<Vec2>,
+    /// The spatial accelerations of the bodies at `u̇ = 0` `[nbody]` (rad/s², m/s²).
+    accel: Vec<Twist>,
+    /// Whether vertices on fixed half-spaces take their exact velocity products
+    /// ([`Self::vertex_products`]; the default) or the differences like every point.
+    exact_products: bool,
     /// One column of `Y`, or `Y λ` (nu).
     column: Vec<Real>,
     /// The velocity-product terms `c` (2k).
@@ -230,6 +281,10 @@ impl Persistent {
             q_fd: vec![0.0; model.nq()],
             qdot_fd: vec![0.0; model.nq()],
             v_fd: Vec::new(),
+            pairs: Vec::new(),
+            planes: Vec::new(),
+            accel: vec![Twist::ZERO; model.bodies().len()],
+            exact_products: true,
             column: vec![0.0; nu],
             c: DVector::zeros(0),
             jac: DMatrix::zeros(0, nu),
@@ -266,6 +321,13 @@ impl Persistent {
         self.ev.points.clear();
         self.ev.at = None;
         self.clear_bounds();
+    }
+
+    /// Gives vertices on fixed half-spaces their exact velocity products (the default) or,
+    /// with `false`, the central differences of every other point (the oracle of the
+    /// tests).
+    pub fn set_exact_products(&mut self, on: bool) {
+        self.exact_products = on;
     }
 
     /// Forgets the bounds of the force functions (before a step).
@@ -313,14 +375,36 @@ impl Persistent {
     ///
     /// Four kinematics passes in all, each shared by every point (one per point and shift
     /// before: 44 % of the 32-link chain lying on the floor, with ~35 closed points; the
-    /// same numbers).
+    /// same numbers). When every closed point is a vertex on a half-space of the world and
+    /// the model is holonomic with no prescribed motion, none: [`Self::vertex_products`]
+    /// gives `c` exactly.
     fn velocity_products(
         &mut self,
         model: &Model,
+        data: &Data,
         (t, q, u): (Real, &[Real], &[Real]),
     ) -> Result<(), SimError> {
         let eps = 1e-3 * self.scales.length / self.scales.speed;
         let k = self.closed.len();
+        // Each closed point's pair looked up once.
+        self.pairs.clear();
+        for c in &self.closed {
+            self.pairs.push(resolve(model, data, c.pair)?);
+        }
+        let prescribed = model.joints().iter().any(|j| j.drive.is_some());
+        if self.exact_products && model.is_holonomic() && !prescribed {
+            let planes = &mut self.planes;
+            planes.clear();
+            planes.extend(
+                self.pairs
+                    .iter()
+                    .map_while(|p| vertex_on_fixed_plane(model, p)),
+            );
+            if planes.len() == k {
+                self.vertex_products(model, data);
+                return Ok(());
+            }
+        }
         // v at s = +ε, −ε, +2ε, −2ε, of each point.
         self.v_fd.clear();
         self.v_fd.resize(k, [(0.0, 0.0); 4]);
@@ -342,7 +426,13 @@ impl Persistent {
                 let Closed { pair, local, .. } = self.closed[i];
                 self.v_fd[i][shift] = self
                     .eval
-                    .velocities(model, &self.data_fd, pair, local, self.scales.length)?
+                    .velocities_of(
+                        model,
+                        &self.data_fd,
+                        (pair, &self.pairs[i]),
+                        local,
+                        self.scales.length,
+                    )?
                     .ok_or_else(|| SimError::Contact {
                         t,
                         message: format!("closed contact point of pair #{} lost", pair.index()),
@@ -361,6 +451,34 @@ impl Persistent {
             );
         }
         Ok(())
+    }
+
+    /// The velocity-product parts `c` of closed points that are vertices of bodies on
+    /// half-spaces of the world (`self.planes`, their normals `n`), exactly, into `self.c`:
+    /// the vertex `P` is a material point of its body and `n` is fixed, so that
+    /// `V_n = n·v_P`, `V_t = perp(n)·v_P` and, along the motion at fixed `u` (a holonomic
+    /// model; with no prescribed motion, whose `q̈_p(t)` the test below does not cover),
+    ///
+    /// ```text
+    /// c_n = n·a_P,   c_t = perp(n)·a_P,   a_P = A.v + A.ω perp(P) + ω perp(v_P)
+    /// ```
+    ///
+    /// with `A` the body's spatial acceleration at `u̇ = 0`
+    /// ([`crate::kinematics::velocity_product_accelerations`], [`point_acceleration`]).
+    /// The same numbers as the differences of [`Self::velocity_products`] to their error
+    /// (the test `vertex_products_agree_with_the_differences`), without their four
+    /// kinematics passes and contact queries. `data` holds the kinematics of the state.
+    fn vertex_products(&mut self, model: &Model, data: &Data) {
+        velocity_product_accelerations(model, data, &mut self.accel);
+        for (i, (c, n)) in self.closed.iter().zip(&self.planes).enumerate() {
+            let Some(body) = model.colliders()[self.pairs[i].a.index()].body else {
+                continue; // not eligible (`vertex_on_fixed_plane`)
+            };
+            let p = data.body_pose[body.index()].transform_point(c.local);
+            let a = point_acceleration(data, body, p, self.accel[body.index()]);
+            self.c[2 * i] = n.dot(a);
+            self.c[2 * i + 1] = perp(*n).dot(a);
+        }
     }
 
     /// The rows, `A`, `b` of the closed points at `(t, q, u)`. `data` holds the forward
@@ -397,7 +515,7 @@ impl Persistent {
                 }
             }
         }
-        self.velocity_products(model, (t, q, u))?;
+        self.velocity_products(model, data, (t, q, u))?;
         // Y = F⁻¹ Jᵀ column by column, with the factor M = F Fᵀ; A = J M⁻¹ Jᵀ = Yᵀ Y, one
         // triangle of dot products mirrored; b = J u̇_free + c.
         for col in 0..2 * k {
@@ -647,6 +765,27 @@ pub struct Selection {
     pub painleve: Vec<Real>,
 }
 
+/// The velocities `(v_n, v_t)` of [`PointScratch::velocities`] from the pair's contact
+/// points `candidates` (of [`PointScratch::candidates`] at the state of `data`): those of
+/// the one nearest `local`, `None` if there is none.
+pub(crate) fn nearest_velocities(
+    model: &Model,
+    data: &Data,
+    p: &ContactPair,
+    candidates: &[(PairContact, Vec2)],
+    local: Vec2,
+) -> Result<Option<(Real, Real)>, SimError> {
+    let Some((c, _)) = candidates
+        .iter()
+        .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
+    else {
+        return Ok(None);
+    };
+    let v_r = relative_velocity_of(model, data, p, c).map_err(|e| e.at(data.time))?;
+    let n = -c.normal;
+    Ok(Some((v_r.dot(n), v_r.dot(perp(n)))))
+}
+
 /// Scratch to evaluate one contact point: the manifold, the frame and its rows.
 pub struct PointScratch {
     manifold: ManifoldWorkspace,
@@ -690,17 +829,21 @@ impl PointScratch {
         local: Vec2,
         prediction: Real,
     ) -> Result<Option<(Real, Real)>, SimError> {
-        let t = data.time;
-        let candidates = self.candidates(model, data, pair, prediction)?;
-        let Some((c, _)) = candidates
-            .into_iter()
-            .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
-        else {
-            return Ok(None);
-        };
-        let v_r = relative_velocity(model, data, pair, &c).map_err(|e| e.at(t))?;
-        let n = -c.normal;
-        Ok(Some((v_r.dot(n), v_r.dot(crate::math::perp(n)))))
+        let p = resolve(model, data, pair)?;
+        self.velocities_of(model, data, (pair, &p), local, prediction)
+    }
+
+    /// [`Self::velocities`] of a pair already resolved (`model.pair(pair)`).
+    fn velocities_of(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        (pair, p): (PairId, &ContactPair),
+        local: Vec2,
+        prediction: Real,
+    ) -> Result<Option<(Real, Real)>, SimError> {
+        let candidates = pair_points_of(model, data, (pair, p), prediction, &mut self.manifold)?;
+        nearest_velocities(model, data, p, &candidates, local)
     }
 
     /// The point of `pair` nearest `local` (a point on `a` in its body's frame) at the state
@@ -741,5 +884,76 @@ impl PointScratch {
             v_t: frame.v_t(),
             frame,
         }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::forward_kinematics;
+    use crate::sim::{MaterialOverride, Simulation};
+
+    /// The exact velocity products of vertices on the floor ([`Persistent::vertex_products`])
+    /// agree with the central differences ([`Persistent::velocity_products`]) at states
+    /// around the scenes' initial contacts, with speeds of up to 3 (rad/s, m/s): a
+    /// segment on a revolute joint (Kane's pendulum), a box and a rod on planar joints.
+    #[test]
+    fn vertex_products_agree_with_the_differences() {
+        for name in ["kane_double_pendulum", "rocking_block", "painleve_rod"] {
+            let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+            let scene = crate::scene::load(std::path::Path::new(&path)).unwrap();
+            let model = &scene.model;
+            let sim = Simulation::new(model, &scene.settings, MaterialOverride::default());
+            let scales = sim.unwrap().scales();
+            let mut data = Data::new(model);
+            let (q0, u0) = (&scene.initial.q, &scene.initial.u);
+            forward_kinematics(model, &mut data, 0.0, q0.as_slice(), u0.as_slice()).unwrap();
+            // The contact points of every pair at the initial state, as closed points.
+            let mut ws = ManifoldWorkspace::default();
+            let mut closed = Vec::new();
+            for pair in model.pair_ids() {
+                for (_, local) in pair_points(model, &data, pair, 1e-6, &mut ws).unwrap() {
+                    closed.push(Closed {
+                        pair,
+                        local,
+                        hold: Hold::Slide(1.0),
+                        slip_margin: 0.0,
+                        reference: (0.0, 0.0),
+                    });
+                }
+            }
+            assert!(!closed.is_empty(), "{name}: no contact point at the start");
+            let mut p = Persistent::new(model, scales);
+            p.set(closed.clone(), vec![0.3; closed.len()]);
+            let mut worst: Real = 0.0;
+            for k in 0..20 {
+                // A state near the start: small turns, speeds in [−3, 3].
+                let wave = |i: usize, f: Real| ((k * 7 + i * 3) as Real * f).sin();
+                let q: Vec<Real> = (q0.iter().enumerate())
+                    .map(|(i, x)| x + 1e-3 * wave(i, 1.3))
+                    .collect();
+                let u: Vec<Real> = (0..u0.len()).map(|i| 3.0 * wave(i, 0.7)).collect();
+                let t = 0.01 * k as Real;
+                forward_kinematics(model, &mut data, t, &q, &u).unwrap();
+                p.set_exact_products(true);
+                p.velocity_products(model, &data, (t, &q, &u)).unwrap();
+                assert_eq!(p.planes.len(), closed.len(), "{name}: not the exact path");
+                let exact = p.c.clone();
+                p.set_exact_products(false);
+                p.velocity_products(model, &data, (t, &q, &u)).unwrap();
+                let scale = p.c.amax().max(1.0);
+                let err = (&exact - &p.c).amax() / scale;
+                worst = worst.max(err);
+                assert!(
+                    err < 1e-10,
+                    "{name}, state {k}: exact {exact:?} differences {:?}",
+                    p.c
+                );
+            }
+            println!(
+                "{name}: {} points, worst relative difference {worst:.1e}",
+                closed.len()
+            );
+        }
     }
 }
