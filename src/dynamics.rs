@@ -95,6 +95,10 @@ enum FactorStorage {
     /// `M⁻¹ = Gᵀ D⁻¹ G` by the articulated-body algorithm, `O(n)`, for deep trees of
     /// holonomic models ([`ArticulatedFactor`]); `M` itself is not formed.
     Articulated(Box<ArticulatedFactor>),
+    /// `M = L Lᵀ` dense for two speeds (the full `2 × 2` pattern), `[L₀₀, L₁₀, L₁₁]`: the
+    /// operations of nalgebra's [`Cholesky`] and of its solves in the same order, on the
+    /// stack ([`cholesky_2x2`]), so the same bits without the dynamic-size bookkeeping.
+    Dense2([Real; 3]),
     /// `M = L Lᵀ` dense (a full pattern): the factor, or the buffer before the first one.
     Dense {
         chol: Option<Cholesky<Real, Dyn>>,
@@ -135,7 +139,9 @@ impl MassFactor {
     /// first factorization when `allocate` is false.
     pub fn new(pattern: TreePattern, allocate: bool) -> Self {
         let n = pattern.len();
-        let storage = if pattern.entries() == n * (n + 1) / 2 {
+        let storage = if n == 2 && pattern.entries() == 3 {
+            FactorStorage::Dense2([0.0; 3])
+        } else if pattern.entries() == n * (n + 1) / 2 {
             FactorStorage::Dense {
                 chol: None,
                 spare: allocate.then(|| DMatrix::zeros(n, n)),
@@ -171,6 +177,10 @@ impl MassFactor {
                 let l = c.l();
                 &l * l.transpose()
             }),
+            FactorStorage::Dense2([l00, l10, l11]) => {
+                let l = DMatrix::from_row_slice(2, 2, &[*l00, 0.0, *l10, *l11]);
+                Some(&l * l.transpose())
+            }
             FactorStorage::Articulated(_) => None,
         }
     }
@@ -191,6 +201,16 @@ impl MassFactor {
         self.valid = false;
         let ok = match &mut self.storage {
             FactorStorage::Tree(l) => l.factor_ltl_from(m).is_ok(),
+            FactorStorage::Dense2(l) => {
+                let (m00, m10, m11) = (m.row(0)[0], m.row(1)[1], m.row(1)[0]);
+                match cholesky_2x2(m00, m10, m11) {
+                    Some(f) => {
+                        *l = f;
+                        true
+                    }
+                    None => false,
+                }
+            }
             FactorStorage::Dense { chol, spare, n } => {
                 let mut buf = match (chol.take(), spare.take()) {
                     (Some(c), _) => c.unpack_dirty(),
@@ -237,6 +257,10 @@ impl MassFactor {
                 check_len("right-hand side", a.nrows(), b.len())?;
                 a.solve_factor_in_place(b);
             }
+            FactorStorage::Dense2(l) => {
+                check_len("right-hand side", 2, b.len())?;
+                solve_lower_2x2(l, b);
+            }
             FactorStorage::Dense { chol, n, .. } => {
                 let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
                 check_len("right-hand side", *n, b.len())?;
@@ -261,6 +285,10 @@ impl MassFactor {
             FactorStorage::Articulated(a) => {
                 check_len("right-hand side", a.nrows(), y.len())?;
                 a.solve_factor_transpose_in_place(y);
+            }
+            FactorStorage::Dense2(l) => {
+                check_len("right-hand side", 2, y.len())?;
+                solve_upper_2x2(l, y);
             }
             FactorStorage::Dense { chol, n, .. } => {
                 let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
@@ -288,6 +316,11 @@ impl MassFactor {
                 check_len("right-hand side", a.nrows(), b.len())?;
                 a.solve_in_place(b);
             }
+            FactorStorage::Dense2(l) => {
+                check_len("right-hand side", 2, b.len())?;
+                solve_lower_2x2(l, b);
+                solve_upper_2x2(l, b);
+            }
             FactorStorage::Dense { chol, n, .. } => {
                 let chol = chol.as_ref().ok_or(DynamicsError::NotFactored)?;
                 check_len("right-hand side", *n, b.len())?;
@@ -296,6 +329,52 @@ impl MassFactor {
         }
         Ok(())
     }
+}
+
+/// The Cholesky factor `[L₀₀, L₁₀, L₁₁]` of the symmetric `2 × 2` matrix `[[m00, m10],
+/// [m10, m11]]`, `M = L Lᵀ`, or `None` where nalgebra's [`Cholesky::new`] fails (a pivot
+/// zero, negative or NaN):
+///
+/// ```text
+/// L₀₀ = √m00,   L₁₀ = m10 / L₀₀,   L₁₁ = √(m11 − L₁₀ L₁₀)
+/// ```
+///
+/// nalgebra's column algorithm for `n = 2` in its order of operations (its `axpy` adds
+/// `(−L₁₀) L₁₀` to `m11`, the same number as the subtraction), so its bits: the recorded
+/// runs of `kane_double_pendulum` depend on them (test
+/// `the_2x2_cholesky_is_nalgebras_to_the_bit`).
+fn cholesky_2x2(m00: Real, m10: Real, m11: Real) -> Option<[Real; 3]> {
+    // nalgebra's test: the pivot is not zero and `try_sqrt` takes it (`≥ 0`, not NaN),
+    // that is `> 0`.
+    let pivot_ok = |v: Real| v > 0.0;
+    if !pivot_ok(m00) {
+        return None;
+    }
+    let l00 = m00.sqrt();
+    let l10 = m10 / l00;
+    let d = m11 - l10 * l10;
+    if !pivot_ok(d) {
+        return None;
+    }
+    Some([l00, l10, d.sqrt()])
+}
+
+/// `b ← L⁻¹ b` for the `2 × 2` factor `l = [L₀₀, L₁₀, L₁₁]`, forward, as nalgebra's
+/// `solve_lower_triangular_unchecked_mut`: `y₀ = b₀ / L₀₀`, `y₁ = (b₁ − y₀ L₁₀) / L₁₁`.
+fn solve_lower_2x2(l: &[Real; 3], b: &mut [Real]) {
+    let y0 = b[0] / l[0];
+    b[0] = y0;
+    b[1] = (b[1] - y0 * l[1]) / l[2];
+}
+
+/// `y ← L⁻ᵀ y` for the `2 × 2` factor `l = [L₀₀, L₁₀, L₁₁]`, backward, as nalgebra's
+/// `ad_solve_lower_triangular_unchecked_mut`: `x₁ = y₁ / L₁₁`, `x₀ = (y₀ − (0 + L₁₀ x₁)) /
+/// L₀₀` (its dot product starts from `+0`, which turns a `−0` product into `+0`).
+fn solve_upper_2x2(l: &[Real; 3], y: &mut [Real]) {
+    let x1 = y[1] / l[2];
+    y[1] = x1;
+    let dot = 0.0 + l[1] * x1;
+    y[0] = (y[0] - dot) / l[0];
 }
 
 /// The fewest speeds for which a holonomic model whose speeds are on average at depth
@@ -909,5 +988,93 @@ fn check_finite(t: Real, what: &'static str, v: &[Real]) -> Result<(), DynamicsE
             index,
             value: v[index],
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small linear congruential generator: uniform numbers in [−1, 1).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> Real {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as Real / (1u64 << 53) as Real) * 2.0 - 1.0
+        }
+    }
+
+    fn same_bits(a: &[Real], b: &[Real]) -> bool {
+        a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    }
+
+    /// [`cholesky_2x2`] and its solves give nalgebra's dense [`Cholesky`] numbers to the
+    /// bit: the factor, `L⁻¹ b`, `L⁻ᵀ b` and `M⁻¹ b`, on random symmetric positive definite
+    /// matrices of spread scales and conditioning (`A Aᵀ + δ I`), right-hand sides with
+    /// zeros of both signs, and the same failures on matrices that are not positive definite
+    /// (zero, negative and NaN pivots).
+    #[test]
+    fn the_2x2_cholesky_is_nalgebras_to_the_bit() {
+        let mut rng = Lcg(16);
+        let mut factored = 0;
+        for case in 0..200_000 {
+            let scale = 10f64.powi((case % 17) as i32 - 8);
+            let (a, b, c, d) = (rng.next(), rng.next(), rng.next(), rng.next());
+            let delta = 10f64.powi(-((case % 15) as i32));
+            let mut m = [
+                (a * a + b * b + delta) * scale,
+                (a * c + b * d) * scale,
+                (c * c + d * d + delta) * scale,
+            ];
+            match case % 11 {
+                // Singular or indefinite, and non-finite.
+                1 => m[2] = m[1] * m[1] / m[0],
+                2 => m[0] = 0.0,
+                3 => m[2] = -m[2],
+                4 => m[case % 3] = Real::NAN,
+                5 => m[0] = -0.0,
+                _ => {}
+            }
+            let mut rhs = [rng.next() * scale, rng.next()];
+            match case % 7 {
+                1 => rhs = [0.0, -0.0],
+                2 => rhs[0] = -0.0,
+                3 => rhs[1] = 0.0,
+                4 => rhs = [-0.0, 0.0],
+                5 => rhs = [-0.0, -0.0],
+                _ => {}
+            }
+            let dense = DMatrix::from_row_slice(2, 2, &[m[0], m[1], m[1], m[2]]);
+            let fast = cholesky_2x2(m[0], m[1], m[2]);
+            let slow = Cholesky::new(dense.clone());
+            assert_eq!(fast.is_some(), slow.is_some(), "{dense}");
+            let (Some(l), Some(chol)) = (fast, slow) else {
+                continue;
+            };
+            factored += 1;
+            let lc = chol.l_dirty();
+            assert!(
+                same_bits(&l, &[lc[(0, 0)], lc[(1, 0)], lc[(1, 1)]]),
+                "{dense}: {l:?} vs {lc}"
+            );
+            let (mut x, mut y) = (rhs, rhs);
+            solve_lower_2x2(&l, &mut x);
+            lc.solve_lower_triangular_unchecked_mut(&mut DVectorViewMut::from_slice(&mut y, 2));
+            assert!(same_bits(&x, &y), "{dense} {rhs:?}: {x:?} vs {y:?}");
+            let (mut x, mut y) = (rhs, rhs);
+            solve_upper_2x2(&l, &mut x);
+            lc.ad_solve_lower_triangular_unchecked_mut(&mut DVectorViewMut::from_slice(&mut y, 2));
+            assert!(same_bits(&x, &y), "{dense} {rhs:?}: {x:?} vs {y:?}");
+            let (mut x, mut y) = (rhs, rhs);
+            solve_lower_2x2(&l, &mut x);
+            solve_upper_2x2(&l, &mut x);
+            chol.solve_mut(&mut DVectorViewMut::from_slice(&mut y, 2));
+            assert!(same_bits(&x, &y), "{dense} {rhs:?}: {x:?} vs {y:?}");
+        }
+        assert!(factored > 100_000, "only {factored} matrices factored");
     }
 }
