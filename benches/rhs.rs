@@ -13,12 +13,14 @@
 use std::hint::black_box;
 use std::path::Path;
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
 use ricochet::dynamics::{
     MassFactor, bias_forces, factor_mass_matrix, forward_dynamics, mass_matrix, mass_pattern,
     solve_mass,
 };
 use ricochet::kinematics::{forward_kinematics, update_positions, update_velocities};
+use ricochet::model::Model;
 use ricochet::scene;
 use ricochet::state::Data;
 
@@ -33,24 +35,37 @@ fn chain_state(n: usize) -> (ricochet::model::Model, Vec<f64>, Vec<f64>) {
     (s.model, q, u)
 }
 
+/// Times one `forward_dynamics` of `model` at `(q, u)` with the workspace `data`.
+fn bench_forward_dynamics(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    id: BenchmarkId,
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    u: &[f64],
+) {
+    group.bench_function(id, |b| {
+        b.iter(|| {
+            forward_dynamics(model, data, black_box(0.0), black_box(q), black_box(u))
+                .expect("forward dynamics");
+            black_box(data.udot[0])
+        })
+    });
+}
+
 fn rhs(c: &mut Criterion) {
     let mut group = c.benchmark_group("rhs");
     for n in LINKS {
         let (model, q, u) = chain_state(n);
         let mut data = Data::new(&model);
-        group.bench_with_input(BenchmarkId::new("chain", n), &n, |b, _| {
-            b.iter(|| {
-                forward_dynamics(
-                    &model,
-                    &mut data,
-                    black_box(0.0),
-                    black_box(&q),
-                    black_box(&u),
-                )
-                .expect("forward dynamics");
-                black_box(data.udot[0])
-            })
-        });
+        bench_forward_dynamics(
+            &mut group,
+            BenchmarkId::new("chain", n),
+            &model,
+            &mut data,
+            &q,
+            &u,
+        );
     }
     group.finish();
 
@@ -105,19 +120,14 @@ fn factors(c: &mut Criterion) {
         ] {
             let mut data = Data::new(&model);
             data.mass_factor = factor;
-            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
-                b.iter(|| {
-                    forward_dynamics(
-                        &model,
-                        &mut data,
-                        black_box(0.0),
-                        black_box(&q),
-                        black_box(&u),
-                    )
-                    .expect("forward dynamics");
-                    black_box(data.udot[0])
-                })
-            });
+            bench_forward_dynamics(
+                &mut group,
+                BenchmarkId::new(name, n),
+                &model,
+                &mut data,
+                &q,
+                &u,
+            );
         }
     }
     group.finish();

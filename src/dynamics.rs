@@ -995,18 +995,7 @@ fn check_finite(t: Real, what: &'static str, v: &[Real]) -> Result<(), DynamicsE
 mod tests {
     use super::*;
 
-    /// A small linear congruential generator: uniform numbers in [−1, 1).
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn next(&mut self) -> Real {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 11) as Real / (1u64 << 53) as Real) * 2.0 - 1.0
-        }
-    }
+    use crate::linalg::tests::Lcg;
 
     fn same_bits(a: &[Real], b: &[Real]) -> bool {
         a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())

@@ -342,13 +342,14 @@ impl MinNorm {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG).
-    struct Lcg(u64);
+    /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG); the unit tests of
+    /// other modules use it too.
+    pub(crate) struct Lcg(pub(crate) u64);
     impl Lcg {
-        fn next(&mut self) -> Real {
+        pub(crate) fn next(&mut self) -> Real {
             self.0 = self
                 .0
                 .wrapping_mul(6364136223846793005)
