@@ -18,7 +18,8 @@
 //!    `≥ 0` at that instant: only gravity, over the hops left, brings it down. Its ledger
 //!    entries (cause `rocking_end`) report the contact impulse of those hops — the jump
 //!    that brings the points to rest ([`ImpactMap::close`]) plus the [`Support`] of the
-//!    closed points until `t∞` — which is `≥ 0`.
+//!    closed points until `t∞` — which is `≥ 0`; a point the jump would pull with no
+//!    support to make up for it is released instead (see `rocking_end`).
 //! 3. **modes**: the touching points that do not approach get their persistent-contact
 //!    modes (open, stick, slide) from the complementarity problem at the acceleration
 //!    level ([`Persistent::select`]). **Painlevé's paradox**: no consistent mode
@@ -510,12 +511,7 @@ impl Simulation<'_> {
                         .filter(|p| p.v_n <= self.scales.v_rest.max(p.still))
                         .copied()
                         .collect();
-                    let points = self.points_below(&held, self.scales.v_rest);
-                    let (q, u) = y[..nqu].split_at_mut(n);
-                    let mut closing =
-                        (self.map).close(self.model, &points, self.scales.v_rest, t, q, u)?;
-                    self.support(t, y, &held, &mut closing)?;
-                    events.extend(closing);
+                    events.extend(self.rocking_end(t, y, held)?);
                 }
             }
         }
@@ -624,6 +620,86 @@ impl Simulation<'_> {
             .filter(|(p, a_n)| p.v_n <= self.scales.v_rest_at(**a_n))
             .map(|(p, _)| *p)
             .collect())
+    }
+
+    /// The end of a rocking accumulation at `t` (`u` in `y` just after the plastic impact
+    /// that ends an accumulation): the jump that brings the `held` points to rest
+    /// ([`ImpactMap::close`]), and the [`Support`] of each entry.
+    ///
+    /// A point whose entry would still pull (`I_n = P_n + S_n < 0`: the jump pulled it
+    /// down and the contact mode that follows does not press it — the other points' forces
+    /// lift it, as along a chain lying on the floor, where a link's end rises while its
+    /// neighbour is pressed) is not a rocking corner: nothing brings it back, so there are
+    /// no hops to sum. It is released (no impulse; it keeps its slow separation) and the
+    /// jump is done again on the others, until no entry pulls or every point would be
+    /// released. A released point that the new jump makes approach is held again (the
+    /// jump must not leave a touching point approaching).
+    fn rocking_end(
+        &mut self,
+        t: Real,
+        y: &mut [Real],
+        mut held: Vec<Touch>,
+    ) -> Result<Vec<ImpactEvent>, SimError> {
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let u_plastic = y[n..nqu].to_vec();
+        let mut released: Vec<Touch> = Vec::new();
+        // A bound on the rounds (a point released, held again, released…); the last
+        // jump stands.
+        let last = 2 * held.len();
+        let mut round = 0;
+        loop {
+            let points = self.points_below(&held, self.scales.v_rest);
+            let (q, u) = y[..nqu].split_at_mut(n);
+            let mut closing = (self.map).close(self.model, &points, self.scales.v_rest, t, q, u)?;
+            self.support(t, y, &held, &mut closing)?;
+            let nearest = |p: Vec2, set: &[Touch]| {
+                (0..set.len()).min_by(|&i, &j| {
+                    let d = |k: usize| (set[k].contact.point_a - p).length();
+                    d(i).total_cmp(&d(j))
+                })
+            };
+            let pulled: Vec<usize> = {
+                let mut idx: Vec<usize> = (closing.iter())
+                    .filter(|ev| ev.impulse().n < 0.0)
+                    .filter_map(|ev| nearest(ev.frame.point(), &held))
+                    .collect();
+                idx.sort_unstable();
+                idx.dedup();
+                idx
+            };
+            // Released points the jump made approach are held again.
+            let approaching: Vec<usize> = if released.is_empty() {
+                Vec::new()
+            } else {
+                let now = self.touching(t, y)?;
+                (0..released.len())
+                    .filter(|&i| {
+                        let r = &released[i];
+                        (now.iter())
+                            .filter(|p| p.pair == r.pair)
+                            .min_by(|a, b| {
+                                let d = |p: &Touch| (p.local - r.local).length();
+                                d(a).total_cmp(&d(b))
+                            })
+                            .is_some_and(|p| p.v_n < -p.still)
+                    })
+                    .collect()
+            };
+            let settled = pulled.is_empty() || pulled.len() == held.len();
+            if round == last || (approaching.is_empty() && settled) {
+                return Ok(closing);
+            } else if !approaching.is_empty() {
+                for &i in approaching.iter().rev() {
+                    held.push(released.remove(i));
+                }
+            } else {
+                for &i in pulled.iter().rev() {
+                    released.push(held.remove(i));
+                }
+            }
+            y[n..nqu].copy_from_slice(&u_plastic);
+            round += 1;
+        }
     }
 
     /// The [`Support`] of each entry of a rocking end at `t` (`y` just after its jump): the

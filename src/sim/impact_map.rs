@@ -532,7 +532,15 @@ impl ImpactMap {
     ///                     stop; W = J M⁻¹ Jᵀ; the other impulses are zero)
     /// ```
     ///
-    /// whose impulses may be of either sign: the jump pulls a rocking body's lifting corner
+    /// — with one addition: a point that keeps slipping (friction, `|v_t⁻| > v_stop`)
+    /// takes Coulomb's sliding friction with its normal impulse, `P_t = −μ s P_n`,
+    /// `s = sign v_t⁻`, so that `W_rr`'s column of its normal row is `W_{r,n} − μ s W_{r,t}`
+    /// (no longer symmetric: a least-squares solve). Each hop the jump replaces slides with
+    /// `I_t = −μ s I_n`, and so does the support of a sliding point: the entry's sum
+    /// `I = P + S` is on the edge of the cone, as the hops' sum would be (a projection
+    /// without it left `|I_t| > μ I_n` by `μ |P_n|` where `P_n < 0`).
+    ///
+    /// The impulses may be of either sign: the jump pulls a rocking body's lifting corner
     /// down (`P_n < 0`). It is only the first part of the contact impulse of the hops it
     /// replaces; the contacts stage adds the second, the [`Support`] of the closed points
     /// until `t∞`, and the ledger entry reports their sum, which is `≥ 0`. What the jump
@@ -553,7 +561,24 @@ impl ImpactMap {
             .filter(|&r| r % 2 == 0 || (points[r / 2].2.mu > 0.0 && set.v[r].abs() <= v_stop))
             .collect();
         let m = rows.len();
-        let w_rr = DMatrix::from_fn(m, m, |i, j| set.w[(rows[i], rows[j])]);
+        // The tangential impulse of a point that keeps slipping, per unit of its normal
+        // impulse: −μ s, s = sign v_t (Coulomb's sliding friction); 0 for the rows that are
+        // themselves unknowns (a tangential row, or a normal row whose point stops).
+        let slide = |r: usize| -> Real {
+            let i = r / 2;
+            if r.is_multiple_of(2) && points[i].2.mu > 0.0 && !rows.contains(&(r + 1)) {
+                -points[i].2.mu * set.v[r + 1].signum()
+            } else {
+                0.0
+            }
+        };
+        let w_rr = DMatrix::from_fn(m, m, |i, j| {
+            let w = set.w[(rows[i], rows[j])];
+            match slide(rows[j]) {
+                0.0 => w,
+                f => w + f * set.w[(rows[i], rows[j] + 1)],
+            }
+        });
         let rhs = DVector::from_fn(m, |i, _| -set.v[rows[i]]);
         // The minimum-norm solution: W_rr is singular where closing points are redundant.
         let mut p_r = DVector::zeros(m);
@@ -567,6 +592,10 @@ impl ImpactMap {
         let mut x = DVector::zeros(2 * k);
         for (i, &r) in rows.iter().enumerate() {
             x[r] = p_r[i];
+            match slide(r) {
+                0.0 => {}
+                f => x[r + 1] = f * p_r[i],
+            }
         }
         let materials: Vec<Material> = points.iter().map(|p| Material { e: 0.0, ..p.2 }).collect();
         let modes: Vec<Mode> = (0..k)
