@@ -122,15 +122,30 @@ pub fn frame_at(
     j_n: &mut [Real],
     j_t: &mut [Real],
 ) -> Result<ContactFrame, ContactError> {
+    let p = model
+        .pair(pair)
+        .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
+    frame_of(model, data, (pair, &p), contact, tangent, ws, (j_n, j_t))
+}
+
+/// [`frame_at`] of a pair already resolved (`p = model.pair(pair)`): the same frame and
+/// rows, without looking the pair up (persistent contact evaluates the same closed points
+/// at every right-hand side).
+pub fn frame_of(
+    model: &Model,
+    data: &Data,
+    (pair, p): (PairId, &ContactPair),
+    contact: PairContact,
+    tangent: Tangent,
+    ws: &mut FrameWorkspace,
+    (j_n, j_t): (&mut [Real], &mut [Real]),
+) -> Result<ContactFrame, ContactError> {
     let PairContact {
         gap,
         point_a,
         point_b,
         normal,
     } = contact;
-    let p = model
-        .pair(pair)
-        .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
     // The Jacobian and velocity of each witness point (zero on the world).
     let (va, rem_a) = side(model, data, p.a, point_a, &mut ws.jac_a)?;
     let (vb, rem_b) = side(model, data, p.b, point_b, &mut ws.jac_b)?;

@@ -16,7 +16,7 @@ mod penetration;
 pub mod query;
 
 pub use frame::{
-    ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at, relative_velocity,
+    ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at, frame_of, relative_velocity,
     relative_velocity_of,
 };
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};

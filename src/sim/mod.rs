@@ -448,6 +448,7 @@ impl<'m> Simulation<'m> {
     /// Stage `broad` before the step: the candidates of the coming step for its cap,
     /// from the boxes grown by what the colliders travel within the horizon
     /// `H = min(h_max, 1.01 · 10 h_next)` from their speeds and gravity (see [`broad`]).
+    /// The kinematics of the step's start in `self.sampler`, which `cap_for_spin` reads too.
     fn broad_before_step(&mut self) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
@@ -455,6 +456,10 @@ impl<'m> Simulation<'m> {
             let y = self.stepper.y();
             update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
             update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
+        }
+        if self.every_pair_forced() {
+            self.arm();
+            return Ok(());
         }
         let h = self
             .h_max_base()
@@ -475,6 +480,10 @@ impl<'m> Simulation<'m> {
     /// sample interval at its speed bound there; their overlapping pairs are the
     /// candidates of the event location (see [`broad`]).
     fn broad_after_step(&mut self) -> Result<(), SimError> {
+        if self.every_pair_forced() {
+            self.arm();
+            return Ok(());
+        }
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let (t0, t1) = (self.stepper.t_prev(), self.stepper.t());
         let parts = self.locator_samples + 1;
@@ -510,6 +519,20 @@ impl<'m> Simulation<'m> {
         self.find_candidates();
         self.arm();
         Ok(())
+    }
+
+    /// Whether every pair of the model is a candidate whatever the boxes: each has a
+    /// closed point or a disarmed gap event, and `arm` adds those pairs to the candidates
+    /// (a pendulum's tip sliding on the floor, its only pair). The broad phase can then
+    /// add nothing and is skipped: the same candidates, the same steps and events.
+    fn every_pair_forced(&self) -> bool {
+        let Some(all) = &self.all_pairs else {
+            return false;
+        };
+        let closed = self.system.persistent.closed();
+        all.iter().all(|&pair| {
+            closed.iter().any(|c| c.pair == pair) || self.disarmed[pair.index()].is_some()
+        })
     }
 
     /// The candidates of the event location: the pairs whose boxes `self.boxes` overlap,
@@ -574,27 +597,17 @@ impl<'m> Simulation<'m> {
     /// — no cap while the shapes cannot reach each other within the step (the time to
     /// cover `d` from the speed `V` under gravity), and
     /// near them samples no farther apart than an eighth of the smaller shape's radius of
-    /// relative motion, and an eighth of a half-turn of rotation.
+    /// relative motion, and an eighth of a half-turn of rotation. The speeds are those of
+    /// the kinematics of the step's start that `broad_before_step` leaves in `self.sampler`.
     fn cap_for_spin(&mut self) -> Result<(), SimError> {
-        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
         let mut cap = self.h_max_base();
         let samples = (self.locator_samples + 1) as Real;
-        {
-            let y = self.stepper.y();
-            update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
-            update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
-        }
         // Gravity speeds the bodies up within the step: the time to cover d from speed V
         // at |g| is 2d / (V + √(V² + 2|g|d)).
         let g = self.model.gravity().length();
-        // One kinematics pass for the gaps of every pair below.
-        self.gaps
-            .set_positions(t, self.stepper.y())
-            .map_err(|e| SimError::Contact {
-                t,
-                message: format!("the positions for the gaps: {e}"),
-            })?;
+        // One kinematics pass for the gaps of every pair below, at the first that needs it.
+        let mut positions = false;
         for r in 0..self.gaps.candidates.len() {
             if !self.armed[gaps::SLOTS * r] {
                 continue;
@@ -611,6 +624,15 @@ impl<'m> Simulation<'m> {
                 samples * (ra.min(rb) / 8.0 / v).min(std::f64::consts::FRAC_PI_8 / wa.max(wb));
             if fine >= cap {
                 continue;
+            }
+            if !positions {
+                (self.gaps)
+                    .set_positions(t, self.stepper.y())
+                    .map_err(|e| SimError::Contact {
+                        t,
+                        message: format!("the positions for the gaps: {e}"),
+                    })?;
+                positions = true;
             }
             let d = self
                 .gaps

@@ -31,7 +31,7 @@ use parry2d_f64::shape::ShapeType;
 use super::{AtTime, Scales, SimError};
 use crate::contact::{
     ContactError, ContactFrame, FrameWorkspace, ManifoldWorkspace, PairContact, Tangent,
-    contact_points_of, frame_at, relative_velocity_of,
+    contact_points_of, frame_of, relative_velocity_of,
 };
 use crate::dynamics::coordinate_rates;
 use crate::kinematics::{
@@ -231,12 +231,18 @@ pub struct Persistent {
     /// The velocities `(v_n, v_t)` of each closed point at the four shifts of the
     /// differences.
     v_fd: Vec<[(Real, Real); 4]>,
-    /// The pair of each closed point, looked up once per evaluation of the velocity
-    /// products.
+    /// The pair of each closed point, looked up once per set of closed points
+    /// ([`Self::resolve_pairs`]).
     pairs: Vec<ContactPair>,
     /// The normals `n` (world frame) of the half-spaces of closed points that are vertices
-    /// on them ([`vertex_on_fixed_plane`]).
+    /// on them ([`vertex_on_fixed_plane`]), up to the first that is not.
     planes: Vec<Vec2>,
+    /// Whether `pairs`, `planes` and `vertices` are those of `closed` (`set` forgets them).
+    resolved: bool,
+    /// Whether every closed point is a vertex on a half-space of the world, in a holonomic
+    /// model with no prescribed motion: its velocity products are exact
+    /// ([`Self::vertex_products`]).
+    vertices: bool,
     /// The spatial accelerations of the bodies at `u̇ = 0` `[nbody]` (rad/s², m/s²).
     accel: Vec<Twist>,
     /// Whether vertices on fixed half-spaces take their exact velocity products
@@ -283,6 +289,8 @@ impl Persistent {
             v_fd: Vec::new(),
             pairs: Vec::new(),
             planes: Vec::new(),
+            resolved: false,
+            vertices: false,
             accel: vec![Twist::ZERO; model.bodies().len()],
             exact_products: true,
             column: vec![0.0; nu],
@@ -320,7 +328,28 @@ impl Persistent {
         self.ev.lambda = DVector::zeros(2 * k);
         self.ev.points.clear();
         self.ev.at = None;
+        self.resolved = false;
         self.clear_bounds();
+    }
+
+    /// Looks up the pair of each closed point, and whether they are all vertices on
+    /// half-spaces of the world (see `vertices`): once per set of closed points, not at
+    /// every right-hand side. `data` gives the time of an error.
+    fn resolve_pairs(&mut self, model: &Model, data: &Data) -> Result<(), SimError> {
+        if self.resolved {
+            return Ok(());
+        }
+        self.pairs.clear();
+        for c in &self.closed {
+            self.pairs.push(resolve(model, data, c.pair)?);
+        }
+        self.planes.clear();
+        (self.planes).extend((self.pairs.iter()).map_while(|p| vertex_on_fixed_plane(model, p)));
+        let prescribed = model.joints().iter().any(|j| j.drive.is_some());
+        self.vertices =
+            self.planes.len() == self.closed.len() && model.is_holonomic() && !prescribed;
+        self.resolved = true;
+        Ok(())
     }
 
     /// Gives vertices on fixed half-spaces their exact velocity products (the default) or,
@@ -387,23 +416,10 @@ impl Persistent {
         let eps = 1e-3 * self.scales.length / self.scales.speed;
         let k = self.closed.len();
         // Each closed point's pair looked up once.
-        self.pairs.clear();
-        for c in &self.closed {
-            self.pairs.push(resolve(model, data, c.pair)?);
-        }
-        let prescribed = model.joints().iter().any(|j| j.drive.is_some());
-        if self.exact_products && model.is_holonomic() && !prescribed {
-            let planes = &mut self.planes;
-            planes.clear();
-            planes.extend(
-                self.pairs
-                    .iter()
-                    .map_while(|p| vertex_on_fixed_plane(model, p)),
-            );
-            if planes.len() == k {
-                self.vertex_products(model, data);
-                return Ok(());
-            }
+        self.resolve_pairs(model, data)?;
+        if self.exact_products && self.vertices {
+            self.vertex_products(model, data);
+            return Ok(());
         }
         // v at s = +ε, −ε, +2ε, −2ε, of each point.
         self.v_fd.clear();
@@ -496,11 +512,13 @@ impl Persistent {
         fit_vector(&mut ev.lambda, 2 * k);
         ev.points.clear();
         ev.complete = true;
+        self.resolve_pairs(model, data)?;
         for i in 0..k {
             let Closed { pair, local, .. } = self.closed[i];
+            let at = (pair, &self.pairs[i]);
             match self
                 .eval
-                .point(model, data, pair, local, self.scales.length)?
+                .point(model, data, at, local, self.scales.length)?
             {
                 Some(p) => {
                     for r in 0..model.nu() {
@@ -846,35 +864,35 @@ impl PointScratch {
         nearest_velocities(model, data, p, &candidates, local)
     }
 
-    /// The point of `pair` nearest `local` (a point on `a` in its body's frame) at the state
-    /// of `data` (positions and velocities updated), with its frame (`t = perp(n)`) and
-    /// velocities; its rows in `j_n`, `j_t`. `None` if the pair has no point within
+    /// The point of the pair `(pair, p)` (`p = model.pair(pair)`, looked up by the caller)
+    /// nearest `local` (a point on `a` in its body's frame) at the state of `data`
+    /// (positions and velocities updated), with its frame (`t = perp(n)`) and velocities; its rows in `j_n`, `j_t`. `None` if the pair has no point within
     /// `prediction` (m).
     pub fn point(
         &mut self,
         model: &Model,
         data: &Data,
-        pair: PairId,
+        (pair, p): (PairId, &ContactPair),
         local: Vec2,
         prediction: Real,
     ) -> Result<Option<Point>, SimError> {
         let t = data.time;
-        let candidates = self.candidates(model, data, pair, prediction)?;
+        let candidates = pair_points_of(model, data, (pair, p), prediction, &mut self.manifold)?;
         let Some((c, l)) = candidates
             .into_iter()
             .min_by(|x, y| (x.1 - local).length().total_cmp(&(y.1 - local).length()))
         else {
             return Ok(None);
         };
-        let frame = frame_at(
+        let rows = (&mut self.j_n[..], &mut self.j_t[..]);
+        let frame = frame_of(
             model,
             data,
-            pair,
+            (pair, p),
             c,
             Tangent::Perp,
             &mut self.frame,
-            &mut self.j_n,
-            &mut self.j_t,
+            rows,
         )
         .map_err(|e| e.at(t))?;
         Ok(Some(Point {
