@@ -633,7 +633,10 @@ impl Simulation<'_> {
     /// no hops to sum. It is released (no impulse; it keeps its slow separation) and the
     /// jump is done again on the others, until no entry pulls or every point would be
     /// released. A released point that the new jump makes approach is held again (the
-    /// jump must not leave a touching point approaching).
+    /// jump must not leave a touching point approaching). A point that barely slipped and
+    /// was stopped by an entry outside the friction cone (`|I_t| > μ I_n`: friction could
+    /// not have stopped its hops' slip) slips instead, against its friction,
+    /// `P_t = −μ s P_n` with `s = −sign I_t`, and the jump is done again.
     fn rocking_end(
         &mut self,
         t: Real,
@@ -643,14 +646,20 @@ impl Simulation<'_> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let u_plastic = y[n..nqu].to_vec();
         let mut released: Vec<Touch> = Vec::new();
-        // A bound on the rounds (a point released, held again, released…); the last
+        // The slip each held point is made to take (`None`: the jump decides).
+        let mut slides: Vec<Option<Real>> = vec![None; held.len()];
+        // A bound on the rounds (a point released, held again, made to slip…); the last
         // jump stands.
-        let last = 2 * held.len();
+        let last = 3 * held.len();
         let mut round = 0;
+        let mut best: Option<(Real, Vec<Real>, Vec<ImpactEvent>)> = None;
         loop {
-            let points = self.points_below(&held, self.scales.v_rest);
+            let points: Vec<(PairId, PairContact, Material)> = (held.iter())
+                .map(|p| (p.pair, p.contact, self.material(p.pair)))
+                .collect();
             let (q, u) = y[..nqu].split_at_mut(n);
-            let mut closing = (self.map).close(self.model, &points, self.scales.v_rest, t, q, u)?;
+            let mut closing =
+                (self.map).close(self.model, &points, &slides, self.scales.v_rest, t, q, u)?;
             self.support(t, y, &held, &mut closing)?;
             let nearest = |p: Vec2, set: &[Touch]| {
                 (0..set.len()).min_by(|&i, &j| {
@@ -685,16 +694,53 @@ impl Simulation<'_> {
                     })
                     .collect()
             };
-            let settled = pulled.is_empty() || pulled.len() == held.len();
-            if round == last || (approaching.is_empty() && settled) {
+            // Stopped points whose entry is outside the cone, and the slip they take.
+            let outside: Vec<(usize, Real)> = (closing.iter())
+                .filter_map(|ev| {
+                    let (i, mu) = (ev.impulse(), ev.material.mu);
+                    let slack = 4.0 * Real::EPSILON * (i.n.abs() + i.t.abs());
+                    let k = nearest(ev.frame.point(), &held)?;
+                    (slides[k].is_none() && i.t.abs() > mu * i.n + slack)
+                        .then(|| (k, -i.t.signum()))
+                })
+                .collect();
+            let released_all = pulled.is_empty() || pulled.len() == held.len();
+            // How far the entries are from impulses ≥ 0 in the cone, and from leaving no
+            // touching point approaching (N·s; m/s for those).
+            let violation: Real = (closing.iter())
+                .map(|ev| {
+                    let i = ev.impulse();
+                    (-i.n).max(0.0) + (i.t.abs() - ev.material.mu * i.n).max(0.0)
+                })
+                .sum::<Real>()
+                + if approaching.is_empty() {
+                    0.0
+                } else {
+                    Real::INFINITY
+                };
+            if best.as_ref().is_none_or(|b| violation < b.0) {
+                best = Some((violation, y[n..nqu].to_vec(), closing.clone()));
+            }
+            if round == last || (approaching.is_empty() && released_all && outside.is_empty()) {
+                // The round that came closest (the last when it settled).
+                let (_, u_best, closing) = best.take().unwrap_or((0.0, Vec::new(), closing));
+                if !u_best.is_empty() {
+                    y[n..nqu].copy_from_slice(&u_best);
+                }
                 return Ok(closing);
             } else if !approaching.is_empty() {
                 for &i in approaching.iter().rev() {
                     held.push(released.remove(i));
+                    slides.push(None);
                 }
-            } else {
+            } else if !released_all {
                 for &i in pulled.iter().rev() {
                     released.push(held.remove(i));
+                    slides.remove(i);
+                }
+            } else {
+                for &(k, s) in &outside {
+                    slides[k] = Some(s);
                 }
             }
             y[n..nqu].copy_from_slice(&u_plastic);

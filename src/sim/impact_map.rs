@@ -535,7 +535,9 @@ impl ImpactMap {
     /// — with one addition: a point that keeps slipping (friction, `|v_t⁻| > v_stop`)
     /// takes Coulomb's sliding friction with its normal impulse, `P_t = −μ s P_n`,
     /// `s = sign v_t⁻`, so that `W_rr`'s column of its normal row is `W_{r,n} − μ s W_{r,t}`
-    /// (no longer symmetric: a least-squares solve). Each hop the jump replaces slides with
+    /// (no longer symmetric: a least-squares solve). `slides[i] = Some(s)` makes point `i`
+    /// slip with `s` even where it barely slips (the caller's choice when stopping it
+    /// would take an impulse outside the cone). Each hop the jump replaces slides with
     /// `I_t = −μ s I_n`, and so does the support of a sliding point: the entry's sum
     /// `I = P + S` is on the edge of the cone, as the hops' sum would be (a projection
     /// without it left `|I_t| > μ I_n` by `μ |P_n|` where `P_n < 0`).
@@ -546,10 +548,12 @@ impl ImpactMap {
     /// until `t∞`, and the ledger entry reports their sum, which is `≥ 0`. What the jump
     /// removes is the energy of the hops left, of the order of `m v_rest²`, and it is in
     /// the ledger (Eq. (29) of the jump).
+    #[allow(clippy::too_many_arguments)]
     pub fn close(
         &mut self,
         model: &Model,
         points: &[(PairId, PairContact, Material)],
+        slides: &[Option<Real>],
         v_stop: Real,
         t: Real,
         q: &[Real],
@@ -557,17 +561,23 @@ impl ImpactMap {
     ) -> Result<Vec<ImpactEvent>, SimError> {
         let k = points.len();
         let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
+        let forced = |i: usize| slides.get(i).copied().flatten();
         let rows: Vec<usize> = (0..2 * k)
-            .filter(|&r| r % 2 == 0 || (points[r / 2].2.mu > 0.0 && set.v[r].abs() <= v_stop))
+            .filter(|&r| {
+                let i = r / 2;
+                r.is_multiple_of(2)
+                    || (points[i].2.mu > 0.0 && set.v[r].abs() <= v_stop && forced(i).is_none())
+            })
             .collect();
         let m = rows.len();
         // The tangential impulse of a point that keeps slipping, per unit of its normal
-        // impulse: −μ s, s = sign v_t (Coulomb's sliding friction); 0 for the rows that are
-        // themselves unknowns (a tangential row, or a normal row whose point stops).
+        // impulse: −μ s, s = sign v_t or the slip `slides` gives (Coulomb's sliding
+        // friction); 0 for the rows that are themselves unknowns (a tangential row, or a
+        // normal row whose point stops).
         let slide = |r: usize| -> Real {
             let i = r / 2;
             if r.is_multiple_of(2) && points[i].2.mu > 0.0 && !rows.contains(&(r + 1)) {
-                -points[i].2.mu * set.v[r + 1].signum()
+                -points[i].2.mu * forced(i).unwrap_or(set.v[r + 1].signum())
             } else {
                 0.0
             }
@@ -603,7 +613,7 @@ impl ImpactMap {
                 if rows.contains(&(2 * i + 1)) {
                     Mode::Stick
                 } else {
-                    Mode::Slide(set.v[2 * i + 1].signum())
+                    Mode::Slide(forced(i).unwrap_or(set.v[2 * i + 1].signum()))
                 }
             })
             .collect();
