@@ -455,7 +455,7 @@ mod tests {
         let (mut fast, mut general) = (ModeSystem::new(), ModeSystem::new());
         let (mut taken, mut solved, mut worst_closed): (usize, usize, Real) = (0, 0, 0.0);
         for case in 0..40_000 {
-            let scale = 10f64.powi((case % 13) as i32 - 6);
+            let scale = 10f64.powi(case % 13 - 6);
             let rows = if case % 7 == 3 { 1 } else { 2 };
             let y = DMatrix::from_fn(rows, 2, |_, _| rng.next() * scale.sqrt());
             let a = y.transpose() * &y;
