@@ -60,6 +60,68 @@ fn householder(x: impl Iterator<Item = Real> + Clone) -> (Real, Real, Real) {
     (alpha, v0, beta)
 }
 
+/// [`MinNorm::solve_to`] of a `2 × 2` system of full rank, on the stack: `a` by columns
+/// (`a[j][i]` is the entry of row `i`, column `j`). The same operations in the same order as
+/// the general path (the pivoted Householder QR, then the back substitution `R₁₁ z = Qᵀ b`),
+/// so the same numbers to the bit (the test `the_2x2_path_is_the_general_path_to_the_bit`).
+/// `None` when the rank test leaves a column out (the general path then solves).
+pub(crate) fn min_norm_2x2(a: [[Real; 2]; 2], b: [Real; 2], rel_tol: Real) -> Option<[Real; 2]> {
+    let mut col = a;
+    let mut c = b;
+    let mut perm = [0, 1];
+    let first = (0..2)
+        .map(|j| dot(&col[j], &col[j]).sqrt())
+        .fold(0.0, Real::max);
+    let rounding = 2.0 * Real::EPSILON * first;
+    let tol = rounding.max(rel_tol * first);
+    // k = 0: the pivot column, its reflection applied to the other column and to c.
+    let mut best = (0, -1.0);
+    for (j, cj) in col.iter().enumerate() {
+        let s = dot(cj, cj);
+        if s > best.1 {
+            best = (j, s);
+        }
+    }
+    if best.1.sqrt() <= tol {
+        return None;
+    }
+    col.swap(0, best.0);
+    perm.swap(0, best.0);
+    let (alpha, v0, beta) = householder(col[0].iter().copied());
+    let v = [col[0][1]];
+    let f = beta * (v0 * col[1][0] + dot(&v, &col[1][1..]));
+    col[1][0] -= f * v0;
+    col[1][1] -= f * v[0];
+    let f = beta * (v0 * c[0] + dot(&v, &c[1..]));
+    c[0] -= f * v0;
+    c[1] -= f * v[0];
+    col[0][0] = alpha;
+    // k = 1: the remaining entry.
+    let mut best = (1, -1.0);
+    let s = dot(&col[1][1..], &col[1][1..]);
+    if s > best.1 {
+        best = (1, s);
+    }
+    if best.1.sqrt() <= tol {
+        return None;
+    }
+    let (alpha, v0, beta) = householder(col[1][1..].iter().copied());
+    let f = beta * (v0 * c[1] + dot(&[], &[]));
+    c[1] -= f * v0;
+    col[1][1] = alpha;
+    // R₁₁ z = c, R[(i, j)] = col[j][i].
+    let mut z = [0.0; 2];
+    for i in (0..2).rev() {
+        let s: Real = (i + 1..2).map(|j| col[j][i] * z[j]).sum();
+        z[i] = (c[i] - s) / col[i][i];
+    }
+    let mut x = [0.0; 2];
+    for (j, &p) in perm.iter().enumerate() {
+        x[p] = z[j];
+    }
+    Some(x)
+}
+
 /// Gives `m` the shape `rows × cols`, keeping its buffer when the shape is already right
 /// (nalgebra's `resize_mut` copies into a new buffer every time); the entries are left as
 /// they are when it is, and zero otherwise.
@@ -166,11 +228,8 @@ impl MinNorm {
     }
 
     /// [`Self::solve_to`] of a `2 × 2` system of full rank (one closed contact point's
-    /// modes), on the stack: the same operations in the same order as the general path
-    /// (the pivoted Householder QR, then the back substitution `R₁₁ z = Qᵀ b`), so the
-    /// same numbers to the bit (the test `the_2x2_path_is_the_general_path_to_the_bit`),
-    /// without its buffers and loops. `None`, with nothing written, when the rank test
-    /// leaves a column out: the general path then solves.
+    /// modes): [`min_norm_2x2`]. `None`, with nothing written, when the rank test leaves a
+    /// column out: the general path then solves.
     fn solve_to_2x2(
         &mut self,
         a: &DMatrix<Real>,
@@ -178,61 +237,13 @@ impl MinNorm {
         x: &mut DVector<Real>,
         rel_tol: Real,
     ) -> Option<usize> {
-        let mut col = [[a[(0, 0)], a[(1, 0)]], [a[(0, 1)], a[(1, 1)]]];
-        let mut c = [b[0], b[1]];
-        let mut perm = [0, 1];
-        let first = (0..2)
-            .map(|j| dot(&col[j], &col[j]).sqrt())
-            .fold(0.0, Real::max);
-        let rounding = 2.0 * Real::EPSILON * first;
-        let tol = rounding.max(rel_tol * first);
-        // k = 0: the pivot column, its reflection applied to the other column and to c.
-        let mut best = (0, -1.0);
-        for (j, cj) in col.iter().enumerate() {
-            let s = dot(cj, cj);
-            if s > best.1 {
-                best = (j, s);
-            }
-        }
-        if best.1.sqrt() <= tol {
-            return None;
-        }
-        col.swap(0, best.0);
-        perm.swap(0, best.0);
-        let (alpha, v0, beta) = householder(col[0].iter().copied());
-        let v = [col[0][1]];
-        let f = beta * (v0 * col[1][0] + dot(&v, &col[1][1..]));
-        col[1][0] -= f * v0;
-        col[1][1] -= f * v[0];
-        let f = beta * (v0 * c[0] + dot(&v, &c[1..]));
-        c[0] -= f * v0;
-        c[1] -= f * v[0];
-        col[0][0] = alpha;
-        // k = 1: the remaining entry.
-        let mut best = (1, -1.0);
-        let s = dot(&col[1][1..], &col[1][1..]);
-        if s > best.1 {
-            best = (1, s);
-        }
-        if best.1.sqrt() <= tol {
-            return None;
-        }
-        let (alpha, v0, beta) = householder(col[1][1..].iter().copied());
-        let f = beta * (v0 * c[1] + dot(&[], &[]));
-        c[1] -= f * v0;
-        col[1][1] = alpha;
-        // R₁₁ z = c, R[(i, j)] = col[j][i].
-        let mut z = [0.0; 2];
-        for i in (0..2).rev() {
-            let s: Real = (i + 1..2).map(|j| col[j][i] * z[j]).sum();
-            z[i] = (c[i] - s) / col[i][i];
-        }
+        let col = [[a[(0, 0)], a[(1, 0)]], [a[(0, 1)], a[(1, 1)]]];
+        let z = min_norm_2x2(col, [b[0], b[1]], rel_tol)?;
         if x.len() != 2 {
             *x = DVector::zeros(2);
         }
-        for (j, &p) in perm.iter().enumerate() {
-            x[p] = z[j];
-        }
+        x[0] = z[0];
+        x[1] = z[1];
         self.truncated = false;
         Some(2)
     }

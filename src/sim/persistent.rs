@@ -578,27 +578,47 @@ impl Persistent {
                 message: "a closed contact point has no contact any more".to_owned(),
             });
         }
-        self.modes.clear();
-        self.modes.extend(self.closed.iter().map(|c| c.hold.mode()));
-        self.reference.clear();
-        (self.reference).extend(
-            self.closed
-                .iter()
-                .flat_map(|c| [c.reference.0, c.reference.1]),
-        );
+        // One point (the common case): its mode and reference on the stack.
+        let (one_mode, one_reference);
+        let (modes, reference) = match self.closed.as_slice() {
+            [c] => {
+                one_mode = [c.hold.mode()];
+                one_reference = [c.reference.0, c.reference.1];
+                (&one_mode[..], &one_reference[..])
+            }
+            _ => {
+                self.modes.clear();
+                self.modes.extend(self.closed.iter().map(|c| c.hold.mode()));
+                self.reference.clear();
+                (self.reference).extend(
+                    self.closed
+                        .iter()
+                        .flat_map(|c| [c.reference.0, c.reference.1]),
+                );
+                (&self.modes[..], &self.reference[..])
+            }
+        };
         let (x, _) = (self.system)
-            .forces_near(&self.ev.a, &self.b, &self.mu, &self.modes, &self.reference)
+            .forces_near(&self.ev.a, &self.b, &self.mu, modes, reference)
             .ok_or_else(|| SimError::Contact {
                 t,
                 message: "the forces of the closed contact points have no solution".to_owned(),
             })?;
         self.ev.lambda.copy_from(x);
-        // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ).
-        let mut y_lambda = DVector::from_vec(std::mem::take(&mut self.column));
-        y_lambda.gemv(1.0, &self.y, &self.ev.lambda, 0.0);
-        let solved = (data.mass_factor).solve_factor_transpose_in_place(y_lambda.as_mut_slice());
-        self.column = y_lambda.data.into();
-        solved.map_err(|e| e.at(t))?;
+        // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ); Y λ summed column by column in the order of
+        // nalgebra's `gemv` (the same numbers), without its generic machinery.
+        let (nu, lambda) = (self.column.len(), self.ev.lambda.as_slice());
+        let ys = self.y.as_slice();
+        for (r, out) in self.column.iter_mut().enumerate() {
+            let mut v = ys[r] * lambda[0];
+            for (j, l) in lambda.iter().enumerate().skip(1) {
+                v += ys[j * nu + r] * l;
+            }
+            *out = v;
+        }
+        (data.mass_factor)
+            .solve_factor_transpose_in_place(&mut self.column)
+            .map_err(|e| e.at(t))?;
         for (a, d) in data.udot.iter_mut().zip(&self.column) {
             *a += d;
         }
