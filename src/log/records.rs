@@ -186,6 +186,112 @@ impl StateRecord {
     }
 }
 
+impl StateRecord {
+    /// Appends the record's JSON text to `out`: byte for byte what `serde_json::to_writer`
+    /// writes for it (its derived `Serialize`: the fields in declaration order, compact),
+    /// without serde's per-field machinery — the writer thread encodes ~100 of these per
+    /// simulated second (issue 16). Numbers go through serde_json's own `CompactFormatter`
+    /// (the same shortest round-trip float text, `null` for a non-finite one), the names
+    /// through [`json_string`]. `tests::state_json_is_serde_json_s` holds it to
+    /// `serde_json::to_vec` over random records.
+    pub(crate) fn append_json(&self, out: &mut Vec<u8>) {
+        use serde_json::ser::Formatter;
+        out.extend_from_slice(b"{\"t\":");
+        json_f64(out, self.t);
+        out.extend_from_slice(b",\"q\":");
+        json_f64s(out, &self.q);
+        out.extend_from_slice(b",\"u\":");
+        json_f64s(out, &self.u);
+        out.extend_from_slice(b",\"energy\":{\"kinetic\":");
+        json_f64(out, self.energy.kinetic);
+        out.extend_from_slice(b",\"potential\":");
+        json_f64(out, self.energy.potential);
+        out.extend_from_slice(b",\"total\":");
+        json_f64(out, self.energy.total);
+        out.extend_from_slice(b"},\"mode\":");
+        json_mode(out, self.mode);
+        out.extend_from_slice(b",\"mode_code\":");
+        json_u64(out, u64::from(self.mode_code));
+        out.extend_from_slice(b",\"contacts\":[");
+        for (k, c) in self.contacts.iter().enumerate() {
+            // Every field, by name: a field added to the record must be written here.
+            let ContactState {
+                pair,
+                mode,
+                mode_code,
+                gap,
+                slip,
+            } = c;
+            if k > 0 {
+                out.push(b',');
+            }
+            out.extend_from_slice(b"{\"pair\":");
+            json_string(out, pair);
+            out.extend_from_slice(b",\"mode\":");
+            json_mode(out, *mode);
+            out.extend_from_slice(b",\"mode_code\":");
+            json_u64(out, u64::from(*mode_code));
+            out.extend_from_slice(b",\"gap\":");
+            json_f64(out, *gap);
+            out.extend_from_slice(b",\"slip\":");
+            let _ = serde_json::ser::CompactFormatter.write_i8(out, *slip);
+            out.push(b'}');
+        }
+        out.extend_from_slice(b"],\"impact_count\":");
+        json_u64(out, self.impact_count);
+        out.push(b'}');
+    }
+}
+
+/// `x` as serde_json writes an `f64`: its shortest round-trip text, `null` if not finite.
+/// (Writing into a `Vec` cannot fail.)
+fn json_f64(out: &mut Vec<u8>, x: f64) {
+    use serde_json::ser::Formatter;
+    if x.is_finite() {
+        let _ = serde_json::ser::CompactFormatter.write_f64(out, x);
+    } else {
+        out.extend_from_slice(b"null");
+    }
+}
+
+/// `xs` as a JSON array of numbers (as serde_json writes a `Vec<f64>`).
+fn json_f64s(out: &mut Vec<u8>, xs: &[f64]) {
+    out.push(b'[');
+    for (k, &x) in xs.iter().enumerate() {
+        if k > 0 {
+            out.push(b',');
+        }
+        json_f64(out, x);
+    }
+    out.push(b']');
+}
+
+/// `n` as serde_json writes an unsigned integer.
+fn json_u64(out: &mut Vec<u8>, n: u64) {
+    use serde_json::ser::Formatter;
+    let _ = serde_json::ser::CompactFormatter.write_u64(out, n);
+}
+
+/// A contact mode as its serialized name (`snake_case`, [`ContactMode::name`]).
+fn json_mode(out: &mut Vec<u8>, mode: ContactMode) {
+    out.push(b'"');
+    out.extend_from_slice(mode.name().as_bytes());
+    out.push(b'"');
+}
+
+/// `s` as a JSON string, as serde_json writes it: quoted, with `"`, `\\` and the control
+/// characters below U+0020 escaped (serde_json's own escaping for those, which are rare in
+/// a pair's name), everything else verbatim.
+fn json_string(out: &mut Vec<u8>, s: &str) {
+    if s.bytes().any(|b| b < 0x20 || b == b'"' || b == b'\\') {
+        let _ = serde_json::to_writer(&mut *out, s);
+        return;
+    }
+    out.push(b'"');
+    out.extend_from_slice(s.as_bytes());
+    out.push(b'"');
+}
+
 /// A planar vector in the world frame (m, or dimensionless for a direction).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Planar {
@@ -516,6 +622,88 @@ mod tests {
         assert_eq!(s.first_non_finite().as_deref(), Some("q[1]"));
         s.energy.total = f64::INFINITY;
         assert_eq!(s.first_non_finite().as_deref(), Some("energy.total"));
+    }
+
+    /// `StateRecord::append_json` writes the bytes serde_json writes for the record: random
+    /// records with numbers of every magnitude (random bit patterns, subnormals, ±0, whole
+    /// numbers, non-finite ones: `null`), every mode, names that need escaping.
+    #[test]
+    fn state_json_is_serde_json_s() {
+        let mut rng = crate::linalg::tests::Lcg(16);
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -2.0,
+            1e16,
+            1e-7,
+            0.1,
+            f64::MIN_POSITIVE / 3.0,
+            f64::MAX,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let number = |rng: &mut crate::linalg::tests::Lcg| {
+            let r = rng.next();
+            if r < -0.5 {
+                special[(rng.0 >> 40) as usize % special.len()]
+            } else if r < 0.0 {
+                rng.next() * 10f64.powi((rng.0 >> 40) as i32 % 40 - 20)
+            } else {
+                f64::from_bits(rng.0)
+            }
+        };
+        let modes = [
+            ContactMode::Free,
+            ContactMode::Sliding,
+            ContactMode::Sticking,
+            ContactMode::Impact,
+        ];
+        let names = [
+            "rodB/floor",
+            "a\"b/c\\d",
+            "tab\there/\u{1}x\u{7f}",
+            "é/ü∞",
+            "",
+        ];
+        let mut out = Vec::new();
+        for k in 0..2000 {
+            let n = k % 7;
+            let contacts = (0..(k % 4))
+                .map(|i| ContactState {
+                    pair: names[(k + i) % names.len()].to_owned(),
+                    mode: modes[(k + 2 * i) % 4],
+                    mode_code: (k % 256) as u8,
+                    gap: number(&mut rng),
+                    slip: [-1, 0, 1, i8::MIN, i8::MAX][(k + i) % 5],
+                })
+                .collect();
+            let record = StateRecord {
+                t: number(&mut rng),
+                q: (0..n).map(|_| number(&mut rng)).collect(),
+                u: (0..n / 2).map(|_| number(&mut rng)).collect(),
+                energy: Energy {
+                    kinetic: number(&mut rng),
+                    potential: number(&mut rng),
+                    total: number(&mut rng),
+                },
+                mode: modes[k % 4],
+                mode_code: (k % 5) as u8,
+                contacts,
+                impact_count: [0, 7, u64::MAX][k % 3],
+            };
+            out.clear();
+            out.extend_from_slice(b"prefix");
+            record.append_json(&mut out);
+            let expected = serde_json::to_vec(&record).unwrap();
+            assert_eq!(
+                String::from_utf8_lossy(&out[6..]),
+                String::from_utf8_lossy(&expected),
+                "record {k}"
+            );
+            assert_eq!(&out[..6], b"prefix");
+        }
     }
 
     #[test]

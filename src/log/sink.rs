@@ -517,7 +517,7 @@ impl<W: Write + Seek> Writing<W> {
                 Payload::Bytes { start, end } => &batch.bytes[start..end],
                 Payload::State(k) => {
                     self.encoded.clear();
-                    append_json(&mut self.encoded, Topic::State, &batch.states[k])?;
+                    batch.states[k].append_json(&mut self.encoded);
                     &self.encoded[..]
                 }
                 Payload::Transforms(k) => {
