@@ -2,20 +2,27 @@
 //! writing them out overlaps with the simulation.
 //!
 //! The simulation thread checks each message (a bad number is reported at once, naming
-//! the field) and puts it in a [`Batch`]: the `/state` and `/tf` samples and the impacts
-//! as copies of their records, into slots that keep their allocations from one batch to
-//! the next; the other messages encoded (JSON or protobuf). A full batch goes to the sink
-//! thread, which encodes the samples (`/state` as JSON, `/tf` as protobuf) and the three
-//! messages of an impact (its ledger entry on `/impacts`, its arrow on `/scene`, its line
-//! on `/log`), and writes every message to the `mcap::Writer`.
+//! the field) and puts it in a [`Batch`]: the messages encoded (JSON or protobuf; the
+//! `/state` and `/tf` samples by their own encoders,
+//! [`StateRecord::append_json`](super::records::StateRecord::append_json) and
+//! [`append_frame_transforms`](super::foxglove::append_frame_transforms)), back to back in one buffer, and the impacts as copies of
+//! their records. A full batch goes to the sink thread, which encodes the three messages
+//! of an impact (its ledger entry on `/impacts`, its arrow on `/scene`, its line on
+//! `/log`) and writes every message to the `mcap::Writer`.
+//!
+//! The samples used to be copied into the batch and encoded here (issue 16): the copies
+//! cost about what the encoding does, and a short run's batches are mostly new ones, so
+//! the copies allocated (each `/tf` sample's frame names, each `/state` sample's vectors):
+//! on Kane's pendulum (5 s, 100 Hz) encoding on the calling thread is 1.0M instructions
+//! fewer per run over both threads.
 //!
 //! The schemas and channels are registered on the sink thread right before the first
 //! message, so that they share its chunk: a chunk that held only schemas and channels
 //! (which a metadata record written next would close) has no message index, and readers
 //! that bundle `@mcap/core` before 2025 (Foxglove Studio 1.48 among them) refuse such a
 //! file. The channel ids are fixed in advance ([`ChannelSpec::id`]), so the calling side
-//! can stamp its messages before the channels exist. The simulation thread thus pays a copy per sample, and the
-//! JSON encoding, the compression and the I/O overlap with the simulation. Batches
+//! can stamp its messages before the channels exist. The simulation thread thus pays the
+//! encoding of a sample, and the compression and the I/O overlap with the simulation. Batches
 //! and metadata go through one bounded channel, in order, so the file's bytes are those a
 //! writer on the calling thread would produce: two runs of the same scene still give
 //! byte-identical logs. Sending messages in batches keeps the cost of the channel (a
@@ -41,8 +48,8 @@ use mcap::records::{MessageHeader, Metadata};
 
 use super::LogError;
 use super::draw::{self, ArrowStyle};
-use super::foxglove::{FrameTransforms, LogLevel, SceneUpdate, append_protobuf};
-use super::records::{ContactState, ImpactRecord, StateRecord};
+use super::foxglove::{LogLevel, SceneUpdate, append_protobuf};
+use super::records::ImpactRecord;
 use super::run::impact_line;
 use super::schemas::Topic;
 use super::writer::log_message;
@@ -69,11 +76,6 @@ pub(super) struct ChannelSpec {
 enum Payload {
     /// Encoded bytes, `bytes[start..end]` of the batch.
     Bytes { start: usize, end: usize },
-    /// The record in slot `k` of the batch's `/state` samples, encoded on the sink thread.
-    State(usize),
-    /// The record in slot `k` of the batch's `/tf` samples, encoded (protobuf) on the sink
-    /// thread.
-    Transforms(usize),
     /// The ledger entry of impact slot `k` (`/impacts`, JSON).
     Impact(usize),
     /// The arrow of impact slot `k` (`/scene`, protobuf).
@@ -88,19 +90,13 @@ struct ImpactSlot {
     arrow: (f64, ArrowStyle),
 }
 
-/// Messages in order, with the records and bytes they refer to. Its vectors and the
+/// Messages in order, with the bytes and impact records they refer to. Its vectors and the
 /// records in its slots keep their allocations when the batch is cleared and reused.
 #[derive(Default)]
 pub(super) struct Batch {
     messages: Vec<(MessageHeader, Payload)>,
     /// Bytes of the messages encoded on the calling thread, back to back.
     bytes: Vec<u8>,
-    /// `/state` records; the first `n_states` are in use.
-    states: Vec<StateRecord>,
-    n_states: usize,
-    /// `/tf` records; the first `n_transforms` are in use.
-    transforms: Vec<FrameTransforms>,
-    n_transforms: usize,
     /// Impacts; the first `n_impacts` are in use.
     impacts: Vec<ImpactSlot>,
     n_impacts: usize,
@@ -110,24 +106,11 @@ impl Batch {
     fn clear(&mut self) {
         self.messages.clear();
         self.bytes.clear();
-        self.n_states = 0;
-        self.n_transforms = 0;
         self.n_impacts = 0;
     }
 
     fn is_full(&self) -> bool {
         self.messages.len() >= BATCH_MESSAGES || self.bytes.len() >= BATCH_BYTES
-    }
-
-    /// A copy of `state` in the next free slot; its index.
-    fn add_state(&mut self, state: &StateRecord) -> usize {
-        let k = self.n_states;
-        match self.states.get_mut(k) {
-            Some(slot) => copy_state(slot, state),
-            None => self.states.push(state.clone()),
-        }
-        self.n_states += 1;
-        k
     }
 
     /// A copy of `impact` and its arrow in the next free slot; its index.
@@ -145,66 +128,6 @@ impl Batch {
         }
         self.n_impacts += 1;
         k
-    }
-
-    /// A copy of `tf` in the next free slot; its index.
-    fn add_transforms(&mut self, tf: &FrameTransforms) -> usize {
-        let k = self.n_transforms;
-        match self.transforms.get_mut(k) {
-            Some(slot) => copy_transforms(slot, tf),
-            None => self.transforms.push(tf.clone()),
-        }
-        self.n_transforms += 1;
-        k
-    }
-}
-
-/// `*dst = src.clone()`, reusing `dst`'s allocations.
-fn copy_state(dst: &mut StateRecord, src: &StateRecord) {
-    dst.t = src.t;
-    dst.q.clone_from(&src.q);
-    dst.u.clone_from(&src.u);
-    dst.energy = src.energy;
-    dst.mode = src.mode;
-    dst.mode_code = src.mode_code;
-    dst.impact_count = src.impact_count;
-    dst.contacts.truncate(src.contacts.len());
-    for (k, c) in src.contacts.iter().enumerate() {
-        match dst.contacts.get_mut(k) {
-            Some(d) => {
-                // Every field, by name: a field added to the record must be copied here.
-                let ContactState {
-                    pair,
-                    mode,
-                    mode_code,
-                    gap,
-                    slip,
-                } = c;
-                d.pair.clone_from(pair);
-                d.mode = *mode;
-                d.mode_code = *mode_code;
-                d.gap = *gap;
-                d.slip = *slip;
-            }
-            None => dst.contacts.push(c.clone()),
-        }
-    }
-}
-
-/// `*dst = src.clone()`, reusing `dst`'s allocations.
-fn copy_transforms(dst: &mut FrameTransforms, src: &FrameTransforms) {
-    dst.transforms.truncate(src.transforms.len());
-    for (k, f) in src.transforms.iter().enumerate() {
-        match dst.transforms.get_mut(k) {
-            Some(d) => {
-                d.timestamp = f.timestamp;
-                d.parent_frame_id.clone_from(&f.parent_frame_id);
-                d.child_frame_id.clone_from(&f.child_frame_id);
-                d.translation.clone_from(&f.translation);
-                d.rotation.clone_from(&f.rotation);
-            }
-            None => dst.transforms.push(f.clone()),
-        }
     }
 }
 
@@ -344,30 +267,6 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.open
             .messages
             .push((header, Payload::Bytes { start, end }));
-        self.send_if_full()
-    }
-
-    /// Adds a `/state` sample (copied; encoded on the sink thread) with `header`.
-    pub(super) fn push_state(
-        &mut self,
-        header: MessageHeader,
-        state: &StateRecord,
-    ) -> Result<(), LogError> {
-        self.failure.take()?;
-        let k = self.open.add_state(state);
-        self.open.messages.push((header, Payload::State(k)));
-        self.send_if_full()
-    }
-
-    /// Adds a `/tf` sample (copied; encoded on the sink thread) with `header`.
-    pub(super) fn push_transforms(
-        &mut self,
-        header: MessageHeader,
-        tf: &FrameTransforms,
-    ) -> Result<(), LogError> {
-        self.failure.take()?;
-        let k = self.open.add_transforms(tf);
-        self.open.messages.push((header, Payload::Transforms(k)));
         self.send_if_full()
     }
 
@@ -515,17 +414,6 @@ impl<W: Write + Seek> Writing<W> {
         for (header, payload) in &batch.messages {
             let data = match *payload {
                 Payload::Bytes { start, end } => &batch.bytes[start..end],
-                Payload::State(k) => {
-                    self.encoded.clear();
-                    batch.states[k].append_json(&mut self.encoded);
-                    &self.encoded[..]
-                }
-                Payload::Transforms(k) => {
-                    self.encoded.clear();
-                    let tf = &batch.transforms[k];
-                    append_protobuf(&mut self.encoded, Topic::Tf.name(), tf)?;
-                    &self.encoded[..]
-                }
                 Payload::Impact(k) => {
                     self.encoded.clear();
                     let record = &batch.impacts[k].record;

@@ -13,8 +13,8 @@ use serde::Serialize;
 use super::LogError;
 use super::draw::ArrowStyle;
 use super::foxglove::{
-    Encode, FrameTransforms, Log, LogLevel, SceneUpdate, append_protobuf, first_non_finite_scene,
-    first_non_finite_transforms, nanoseconds, timestamp,
+    Encode, FrameTransforms, Log, LogLevel, SceneUpdate, append_frame_transforms, append_protobuf,
+    first_non_finite_scene, first_non_finite_transforms, nanoseconds, timestamp,
 };
 use super::records::{Audit, ImpactRecord, StateRecord};
 use super::schemas::{FORMAT_VERSION, Topic, metadata};
@@ -70,11 +70,11 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 /// refused with [`LogError::NonFinite`] naming the field. A refused message is not
 /// written, and the writer stays usable.
 ///
-/// The rare messages are encoded on the calling thread; the `/state` and `/tf` samples are
-/// copied and encoded on the thread of the `mcap::Writer` (which compresses the chunks and
-/// writes them out), fed in order through a bounded channel, so that logging overlaps with
-/// the simulation and the bytes are the same as a single-threaded writer's (see
-/// `sink.rs`). An I/O error is therefore reported by the call after the one whose message
+/// Messages are encoded on the calling thread (an impact's three are copied and encoded on
+/// the writer thread) and handed in batches, in order, through a bounded channel to the
+/// thread of the `mcap::Writer`, which compresses the chunks and writes them out, so that
+/// logging overlaps with the simulation and the bytes are the same as a single-threaded
+/// writer's (see `sink.rs`). An I/O error is therefore reported by the call after the one whose message
 /// met it (or by `flush`, `finish`).
 ///
 /// Ending a run: call [`finish`](LogWriter::finish), which writes the summary section and
@@ -171,7 +171,7 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         self.metadata(metadata::AUDIT, map)
     }
 
-    /// Writes one `/state` sample at its time `state.t` (encoded on the writer thread).
+    /// Writes one `/state` sample at its time `state.t`.
     pub fn state(&mut self, state: &StateRecord) -> Result<(), LogError> {
         if let Some(field) = state.first_non_finite() {
             return Err(LogError::NonFinite {
@@ -180,10 +180,10 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
                 field,
             });
         }
-        let header = self.header(Topic::State, nanoseconds(state.t)?);
-        self.mcap.push_state(header, state)?;
-        self.advance(Topic::State);
-        Ok(())
+        let time = nanoseconds(state.t)?;
+        let start = self.mcap.buffer().len();
+        state.append_json(self.mcap.buffer());
+        self.push(Topic::State, time, start)
     }
 
     /// Writes one entry of the impact ledger on `/impacts` at its time `impact.t`.
@@ -250,8 +250,7 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         self.scene_on(Topic::Scene, t, update)
     }
 
-    /// Writes frame transforms on `/tf` at simulated time `t` (s) (encoded on the writer
-    /// thread).
+    /// Writes frame transforms on `/tf` at simulated time `t` (s).
     pub fn transforms(&mut self, t: f64, transforms: &FrameTransforms) -> Result<(), LogError> {
         let time = nanoseconds(t)?;
         if let Some(field) = first_non_finite_transforms(transforms) {
@@ -261,10 +260,9 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
                 field,
             });
         }
-        let header = self.header(Topic::Tf, time);
-        self.mcap.push_transforms(header, transforms)?;
-        self.advance(Topic::Tf);
-        Ok(())
+        let start = self.mcap.buffer().len();
+        append_frame_transforms(self.mcap.buffer(), transforms);
+        self.push(Topic::Tf, time, start)
     }
 
     /// Writes a text message on `/log` at simulated time `t` (s), from `ricochet`.
