@@ -654,9 +654,8 @@ impl Simulation<'_> {
         let mut round = 0;
         let mut best: Option<(Real, Vec<Real>, Vec<ImpactEvent>)> = None;
         loop {
-            let points: Vec<(PairId, PairContact, Material)> = (held.iter())
-                .map(|p| (p.pair, p.contact, self.material(p.pair)))
-                .collect();
+            // Every held point, in order (`slides` is indexed like `held`).
+            let points = self.points_below(&held, Real::INFINITY);
             let (q, u) = y[..nqu].split_at_mut(n);
             let mut closing =
                 (self.map).close(self.model, &points, &slides, self.scales.v_rest, t, q, u)?;
@@ -667,10 +666,14 @@ impl Simulation<'_> {
                     d(i).total_cmp(&d(j))
                 })
             };
+            // The held point of each entry.
+            let of_entry: Vec<Option<usize>> = (closing.iter())
+                .map(|ev| nearest(ev.frame.point(), &held))
+                .collect();
             let pulled: Vec<usize> = {
-                let mut idx: Vec<usize> = (closing.iter())
-                    .filter(|ev| ev.impulse().n < 0.0)
-                    .filter_map(|ev| nearest(ev.frame.point(), &held))
+                let mut idx: Vec<usize> = (closing.iter().zip(&of_entry))
+                    .filter(|(ev, _)| ev.impulse().n < 0.0)
+                    .filter_map(|(_, k)| *k)
                     .collect();
                 idx.sort_unstable();
                 idx.dedup();
@@ -695,11 +698,11 @@ impl Simulation<'_> {
                     .collect()
             };
             // Stopped points whose entry is outside the cone, and the slip they take.
-            let outside: Vec<(usize, Real)> = (closing.iter())
-                .filter_map(|ev| {
+            let outside: Vec<(usize, Real)> = (closing.iter().zip(&of_entry))
+                .filter_map(|(ev, k)| {
                     let (i, mu) = (ev.impulse(), ev.material.mu);
                     let slack = 4.0 * Real::EPSILON * (i.n.abs() + i.t.abs());
-                    let k = nearest(ev.frame.point(), &held)?;
+                    let k = (*k)?;
                     (slides[k].is_none() && i.t.abs() > mu * i.n + slack)
                         .then(|| (k, -i.t.signum()))
                 })
@@ -722,10 +725,11 @@ impl Simulation<'_> {
                 best = Some((violation, y[n..nqu].to_vec(), closing.clone()));
             }
             if round == last || (approaching.is_empty() && released_all && outside.is_empty()) {
-                // The round that came closest (the last when it settled).
-                let (_, u_best, closing) = best.take().unwrap_or((0.0, Vec::new(), closing));
-                if !u_best.is_empty() {
+                // The round that came closest to the conditions (this one, unless an
+                // earlier one came closer).
+                if let Some((_, u_best, best)) = best {
                     y[n..nqu].copy_from_slice(&u_best);
+                    return Ok(best);
                 }
                 return Ok(closing);
             } else if !approaching.is_empty() {

@@ -570,14 +570,27 @@ impl ImpactMap {
             })
             .collect();
         let m = rows.len();
+        // Whether each point stops (its tangential row is an unknown).
+        let mut stops = vec![false; k];
+        for &r in rows.iter().filter(|r| !r.is_multiple_of(2)) {
+            stops[r / 2] = true;
+        }
         // The tangential impulse of a point that keeps slipping, per unit of its normal
         // impulse: −μ s, s = sign v_t or the slip `slides` gives (Coulomb's sliding
         // friction); 0 for the rows that are themselves unknowns (a tangential row, or a
-        // normal row whose point stops).
+        // normal row whose point stops). Once per point, not per entry of `W_rr`.
+        let friction: Vec<Real> = (0..k)
+            .map(|i| {
+                if points[i].2.mu > 0.0 && !stops[i] {
+                    -points[i].2.mu * forced(i).unwrap_or(set.v[2 * i + 1].signum())
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         let slide = |r: usize| -> Real {
-            let i = r / 2;
-            if r.is_multiple_of(2) && points[i].2.mu > 0.0 && !rows.contains(&(r + 1)) {
-                -points[i].2.mu * forced(i).unwrap_or(set.v[r + 1].signum())
+            if r.is_multiple_of(2) {
+                friction[r / 2]
             } else {
                 0.0
             }
@@ -610,7 +623,7 @@ impl ImpactMap {
         let materials: Vec<Material> = points.iter().map(|p| Material { e: 0.0, ..p.2 }).collect();
         let modes: Vec<Mode> = (0..k)
             .map(|i| {
-                if rows.contains(&(2 * i + 1)) {
+                if stops[i] {
                     Mode::Stick
                 } else {
                     Mode::Slide(forced(i).unwrap_or(set.v[2 * i + 1].signum()))
