@@ -2,7 +2,7 @@
 //!
 //! A planar multibody simulator with event-driven rigid impacts. An ODE integrator
 //! advances the generalized coordinates between impacts; parry2d finds the first contact
-//! and supplies the normal; the impact law of [P] turns the velocity of approach into
+//! and supplies the normal; the impact law of \[P\] turns the velocity of approach into
 //! impulses; [P, Eq. (16)] updates the generalized speeds; trajectories and a per-impact
 //! energy ledger go to an MCAP file that Foxglove opens.
 //!
@@ -44,16 +44,16 @@
 //!
 //! ## References
 //!
-//! - **[P]** H. Djerassi, *Collision with friction; Part A: Newton's hypothesis*,
+//! - **\[P\]** H. Djerassi, *Collision with friction; Part A: Newton's hypothesis*,
 //!   Multibody System Dynamics 21, 37–54 (2009). The text in `../shared/paper/` with its
 //!   `ERRATA.md`.
-//! - **[KL]** T. R. Kane, D. A. Levinson, *Dynamics: Theory and Applications*, McGraw-Hill
-//!   (1985), the double pendulum of Sect. 5 of [P].
-//! - **[S]** W. J. Stronge, *Impact Mechanics*, Cambridge University Press (2000): the
+//! - **\[KL\]** T. R. Kane, D. A. Levinson, *Dynamics: Theory and Applications*, McGraw-Hill
+//!   (1985), the double pendulum of Sect. 5 of \[P\].
+//! - **\[S\]** W. J. Stronge, *Impact Mechanics*, Cambridge University Press (2000): the
 //!   energetic coefficient of restitution.
-//! - **[HNW]** E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential
+//! - **\[HNW\]** E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential
 //!   Equations I*, 2nd ed., Springer (1993): DOPRI5 and its dense output (II.5–6).
-//! - **[F]** R. Featherstone, *Rigid Body Dynamics Algorithms*, Springer (2008): the
+//! - **\[F\]** R. Featherstone, *Rigid Body Dynamics Algorithms*, Springer (2008): the
 //!   composite rigid body algorithm.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]

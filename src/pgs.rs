@@ -29,8 +29,8 @@
 //! which vanish exactly at a solution; the solver stops when `max_i |r_i| ≤ tol · s`, with
 //! `s = max(‖b‖_∞, κ ‖x‖_∞)` the velocity scale of the problem.
 //!
-//! References: **[J]** M. Jean, *The non-smooth contact dynamics method*, Comput. Methods
-//! Appl. Mech. Engrg. 177 (1999) 235–257. **[AB]** V. Acary, B. Brogliato, *Numerical
+//! References: **\[J\]** M. Jean, *The non-smooth contact dynamics method*, Comput. Methods
+//! Appl. Mech. Engrg. 177 (1999) 235–257. **\[AB\]** V. Acary, B. Brogliato, *Numerical
 //! Methods for Nonsmooth Dynamical Systems*, Springer (2008).
 
 use crate::math::Real;

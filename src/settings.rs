@@ -30,7 +30,7 @@ pub struct Settings {
 
 /// The rule for a simultaneous impact: several coupled contact points that approach at
 /// one instant, or an impact that makes another touching point of the same group approach
-/// (a cascade). A point alone in its group always gets the scene's one-point law [P].
+/// (a cascade). A point alone in its group always gets the scene's one-point law \[P\].
 ///
 /// The two rules differ on the classic cases: in Newton's cradle (a row of touching equal
 /// balls, struck at one end, `e = 1`) the sequential rule passes the momentum down the row
@@ -44,7 +44,7 @@ pub enum Simultaneous {
     /// cascade it starts is resolved by this law.
     #[default]
     GeneralizedNewton,
-    /// One point at a time: the scene's one-point law [P] on the most approaching point of
+    /// One point at a time: the scene's one-point law \[P\] on the most approaching point of
     /// the group, then again on whichever point approaches after it, until none does.
     Sequential,
 }

@@ -1,4 +1,4 @@
-//! The one-point planar impact laws with Coulomb friction of [P], as pure functions of
+//! The one-point planar impact laws with Coulomb friction of \[P\], as pure functions of
 //! `(W, v^A, e, μ)`. Nothing here knows about bodies.
 //!
 //! ## Singular W (a departure from the paper)

@@ -56,7 +56,7 @@
 //! PATH). Lemke with a lexicographic rule is ~300 lines on nalgebra's types, so it is
 //! written here, with the allocation-free workspace the simulation loop wants.
 //!
-//! Reference: **[CPS]** R. W. Cottle, J.-S. Pang, R. E. Stone, *The Linear Complementarity
+//! Reference: **\[CPS\]** R. W. Cottle, J.-S. Pang, R. E. Stone, *The Linear Complementarity
 //! Problem*, Academic Press (1992), §4.4 (Lemke's method), §4.9 (degeneracy, lexicographic
 //! pivoting).
 

@@ -63,7 +63,7 @@ impl ConstraintKind {
 }
 
 /// A nonholonomic constraint: the point `point` of `body` moves only along `direction`
-/// (see the [module documentation](self)).
+/// (see the documentation of `src/model/constraint.rs`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constraint {
     /// Unique name among constraints.
@@ -115,7 +115,7 @@ impl Constraint {
     }
 }
 
-/// One tree speed (see the [module documentation](self)).
+/// One tree speed (see the documentation of `src/model/constraint.rs`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Speed {
     /// `"<joint>.<suffix>"`: the coordinate's name for a joint rate, `"<joint>.vx_body"`,

@@ -1,4 +1,4 @@
-//! Maps of the classification of [P]: for a given `W` and `e`, the collision type and the
+//! Maps of the classification of \[P\]: for a given `W` and `e`, the collision type and the
 //! sign of `ΔE` over the `(α, μ)` plane under each impact law — [P, Table 1] and
 //! [P, Sect. 4.3] as pictures — with the boundaries `α = (1+e) r_m(μ)` and
 //! `α = −(1+e) r_p(μ)` [P, Eq. (36)].

@@ -1,7 +1,7 @@
 //! Golden runs: one small JSON file per scene, `<scene file stem>.golden.json`, holding
 //! the scene's path (relative to the golden file's folder), the overrides of its settings,
 //! the number of checkpoints, the tolerances and the run's [`Summary`]. `golden check`
-//! re-runs each scene as recorded and compares with [`compare`], as `ricochet compare`
+//! re-runs each scene as recorded and compares with [`compare`](fn@compare), as `ricochet compare`
 //! does; the tolerances are the file's own, so that one scene can be loosened alone.
 //!
 //! JSON rather than TOML: the golden file *is* a summary with a header, read by the same

@@ -67,7 +67,7 @@ impl MaterialOverride {
 /// Why an impulse was applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImpactCause {
-    /// One contact point approaching: the scene's one-point law [P].
+    /// One contact point approaching: the scene's one-point law \[P\].
     Collision,
     /// Several contact points at once, or an impact that made another touching point
     /// approach: Moreau's generalized Newton law ([`ImpactMap::apply_many`]).
@@ -446,7 +446,7 @@ impl ImpactMap {
     /// Applies the impacts of several contact points at once at `(t, q, u)`: `u` becomes
     /// `u⁺`; one ledger entry per point that receives an impulse.
     ///
-    /// The one-point laws of [P] do not apply to several contacts. DEVIATION (a law beyond
+    /// The one-point laws of \[P\] do not apply to several contacts. DEVIATION (a law beyond
     /// the paper): Moreau's generalized Newton law with Coulomb friction, the velocity-level
     /// complementarity problem over all the points (closed ones included, with `v_n⁻ ≈ 0`),
     ///

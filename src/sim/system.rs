@@ -15,7 +15,7 @@ use crate::state::Data;
 /// ```
 ///
 /// where `Fᵀ λ` are the forces of the closed contact points in persistent contact
-/// ([`Persistent`]) and `w = (w_damping, w_applied, w_drives, w_contact)` (J) integrates
+/// (`Persistent`) and `w = (w_damping, w_applied, w_drives, w_contact)` (J) integrates
 /// the powers `P` of the dampers, of the constant efforts, of the prescribed drives and of
 /// the contact forces, for the energy audit.
 pub struct MotionSystem<'m> {

@@ -5,8 +5,8 @@
 //! A run is reduced to a [`Trace`] (its impacts: time, post-impact contact velocity,
 //! energy after; its state at the end time), whatever produced it: the event-driven loop
 //! with DOPRI5 or RK4, the Moreau–Jean time-stepping, or rapier2d (feature `rapier`,
-//! [`rapier`]). [`metrics`] compares a trace with a reference trace (a closed form, or a
-//! tight DOPRI5 run: [`reference`]); [`sweep`] runs the settings of each method and times
+//! `rapier`). [`metrics`] compares a trace with a reference trace (a closed form, or a
+//! tight DOPRI5 run: [`reference`](mod@reference)); [`sweep`] runs the settings of each method and times
 //! them; [`table`] writes and reads the CSV rows; [`chart`] draws the log–log charts;
 //! [`chain`] measures the scaling with the number of links in free fall, [`chain_floor`]
 //! with a floor.

@@ -171,7 +171,7 @@ pub fn write<T: Serialize>(path: &Path, rows: &[T]) -> Result<(), WorkprecError>
     w.flush().map_err(|e| err(e.into()))
 }
 
-/// Reads the rows of a CSV file written by [`write`].
+/// Reads the rows of a CSV file written by [`write`](fn@write).
 pub fn read<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, WorkprecError> {
     let err = |error| WorkprecError::Csv {
         path: path.to_owned(),

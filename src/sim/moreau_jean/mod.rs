@@ -76,10 +76,10 @@
 //!   `rejected` 0.
 //!
 //! References:
-//! - **[AB]** V. Acary, B. Brogliato, *Numerical Methods for Nonsmooth Dynamical Systems:
+//! - **\[AB\]** V. Acary, B. Brogliato, *Numerical Methods for Nonsmooth Dynamical Systems:
 //!   Applications in Mechanics and Electronics*, Lecture Notes in Applied and
 //!   Computational Mechanics 35, Springer (2008), ch. 10 (the Moreau–Jean scheme).
-//! - **[J]** M. Jean, *The non-smooth contact dynamics method*, Comput. Methods Appl.
+//! - **\[J\]** M. Jean, *The non-smooth contact dynamics method*, Comput. Methods Appl.
 //!   Mech. Engrg. 177 (1999) 235–257.
 //! - **[M]** J. J. Moreau, *Unilateral contact and dry friction in finite freedom
 //!   dynamics*, in *Nonsmooth Mechanics and Applications*, CISM 302, Springer (1988).
@@ -115,7 +115,7 @@ use contacts::{ContactProblem, Solved};
 pub struct MoreauJeanSettings {
     /// θ ∈ [½, 1]: where the forces, the mass matrix and the contacts are evaluated
     /// (`t_k + θh`, `q_k + θh u_k`) and the weight of `u_{k+1}` in the positions. ½
-    /// (Moreau's midpoint rule) by default; 1 is the fully implicit velocity of [J].
+    /// (Moreau's midpoint rule) by default; 1 is the fully implicit velocity of \[J\].
     pub theta: Real,
     /// The exact enumeration of [`crate::lcp`] solves steps with at most this many contacts
     /// in the index set (it tries up to `4^m` mode combinations); nonsmooth Gauss–Seidel
