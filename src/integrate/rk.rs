@@ -349,22 +349,31 @@ fn stage_argument(out: &mut [Real], base: &[Real], h: Real, row: &Row, k: &[&[Re
         }
         return;
     }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = base[i] + h * weighted_sum(row, k, i);
+    weighted_sum(out, row, k);
+    for (o, y0) in out.iter_mut().zip(base) {
+        *o = y0 + h * *o;
     }
 }
 
-/// `Σⱼ aⱼ kⱼᵢ` from left to right over the nonzero coefficients (0 for none).
+/// `out = Σⱼ aⱼ kⱼ`, each element summed from left to right over the nonzero coefficients
+/// (0 for none). The sum runs over `j` outside and the elements inside, so that each
+/// `kⱼ` is read as one contiguous slice (no bounds check per term, vector instructions):
+/// element by element the operations and their order are those of `Σⱼ` written per
+/// element, so the result is the same to the bit.
 #[inline]
-fn weighted_sum(row: &Row, k: &[&[Real]; 16], i: usize) -> Real {
+fn weighted_sum(out: &mut [Real], row: &Row, k: &[&[Real]; 16]) {
     let Some(&(j0, a0)) = row.first() else {
-        return 0.0;
+        out.fill(0.0);
+        return;
     };
-    let mut acc = a0 * k[j0][i];
-    for &(j, a) in &row[1..] {
-        acc += a * k[j][i];
+    for (o, k) in out.iter_mut().zip(k[j0]) {
+        *o = a0 * k;
     }
-    acc
+    for &(j, a) in &row[1..] {
+        for (o, k) in out.iter_mut().zip(k[j]) {
+            *o += a * k;
+        }
+    }
 }
 
 /// `out = factor · Σⱼ wⱼ kⱼ` (`out = base + factor · Σ` with a base).
@@ -375,15 +384,16 @@ fn combination(
     row: &Row,
     k: &[&[Real]; 16],
 ) {
+    weighted_sum(out, row, k);
     match base {
         Some(base) => {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = base[i] + factor * weighted_sum(row, k, i);
+            for (o, b) in out.iter_mut().zip(base) {
+                *o = b + factor * *o;
             }
         }
         None => {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = factor * weighted_sum(row, k, i);
+            for o in out.iter_mut() {
+                *o *= factor;
             }
         }
     }
