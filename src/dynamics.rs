@@ -28,8 +28,8 @@ use nalgebra::{Cholesky, DMatrix, DVectorViewMut, Dyn, SymmetricEigen};
 
 use crate::articulated::ArticulatedFactor;
 use crate::kinematics::{KinematicsError, check_len, update_positions, update_velocities};
-use crate::math::Real;
-use crate::model::spatial::{Twist, Wrench};
+use crate::math::{Pose, Real};
+use crate::model::spatial::{Inertia, Twist, Wrench};
 use crate::model::{JointId, Model};
 use crate::state::Data;
 use crate::tree_matrix::{TreeMatrix, TreePattern};
@@ -492,15 +492,29 @@ pub struct Power {
 /// storage if the workspace was built without it, [`Data::for_kinematics`]).
 pub fn mass_matrix(model: &Model, data: &mut Data) {
     if model.is_holonomic() {
-        let mut mass = std::mem::take(&mut data.mass);
-        mass.clear();
-        tree_mass_matrix(model, data, |r, c, m| mass.set_ancestor(r, c, m));
-        data.mass = mass;
+        let Data {
+            mass,
+            composite,
+            body_inertia,
+            joint_frame,
+            subspace,
+            ..
+        } = data;
+        // Every stored entry is set below (a speed's row holds exactly the speeds on its
+        // path to the root), so the matrix needs its storage, not zeros.
+        mass.allocate();
+        let kin = (&joint_frame[..], &subspace[..], &body_inertia[..]);
+        tree_mass_matrix(model, kin, composite, |r, c, m| mass.set_ancestor(r, c, m));
     } else {
         // M = Sᵀ M_v S  (Kane's generalized inertia forces in the speeds u).
         let mut mass_tree = std::mem::take(&mut data.mass_tree);
         mass_tree.fill(0.0);
-        tree_mass_matrix(model, data, |r, c, m| {
+        let kin = (
+            &data.joint_frame[..],
+            &data.subspace[..],
+            &data.body_inertia[..],
+        );
+        tree_mass_matrix(model, kin, &mut data.composite, |r, c, m| {
             mass_tree[(r, c)] = m;
             mass_tree[(c, r)] = m;
         });
@@ -516,29 +530,38 @@ pub fn mass_matrix(model: &Model, data: &mut Data) {
 /// The composite rigid body algorithm of [`mass_matrix`] over the tree speeds: `set(r, c,
 /// M_rc)` for every speed `r` and `c = r` or an ancestor of `r` in the expanded parent
 /// array ([`mass_pattern`]); the other entries are zero.
-fn tree_mass_matrix(model: &Model, data: &mut Data, mut set: impl FnMut(usize, usize, Real)) {
+fn tree_mass_matrix(
+    model: &Model,
+    (frames, subspace, body_inertia): (&[Pose], &[[Twist; 3]], &[Inertia]),
+    composite: &mut [Inertia],
+    mut set: impl FnMut(usize, usize, Real),
+) {
     let joints = model.joints();
+    let n = joints.len();
+    // Sliced to the number of joints once: no bounds checks in the loops.
+    let (frames, subspace, composite) = (&frames[..n], &subspace[..n], &mut composite[..n]);
     // Composite inertias, leaves first.
-    data.composite.copy_from_slice(&data.body_inertia);
-    for i in (0..joints.len()).rev() {
-        if let Some(p) = joints[i].parent {
-            let mut ic = data.composite[i];
-            if joints[i].is_absolute() {
-                ic = ic.projected_at(data.joint_frame[i].translation);
+    composite.copy_from_slice(&body_inertia[..n]);
+    for (i, joint) in joints.iter().enumerate().rev() {
+        if let Some(p) = joint.parent {
+            let mut ic = composite[i];
+            if joint.is_absolute() {
+                ic = ic.projected_at(frames[i].translation);
             }
-            data.composite[p.index()] += ic;
+            composite[p.index()] += ic;
         }
     }
     // Rows: for each free coordinate, the wrench I^c S walked up to the root.
-    let (subspace, frames, composite) = (&data.subspace, &data.joint_frame, &data.composite);
+    let composite = &*composite;
     for (i, joint) in joints.iter().enumerate() {
         let Some(si) = model.q_index(JointId(i)) else {
             continue;
         };
+        let s_i = &subspace[i];
         for k in 0..joint.kind.ndof() {
             let r = si + k;
-            let mut f = composite[i].mul_twist(&subspace[i][k]);
-            for (k2, s) in subspace[i][..=k].iter().enumerate() {
+            let mut f = composite[i].mul_twist(&s_i[k]);
+            for (k2, s) in s_i[..=k].iter().enumerate() {
                 set(r, si + k2, s.dot(&f));
             }
             let mut b = i;
@@ -581,47 +604,83 @@ enum FreeAccel<'a> {
 /// Writes `data.body_accel`, `data.body_wrench`, `data.joint_effort`.
 fn newton_euler(model: &Model, data: &mut Data, accel: FreeAccel<'_>) {
     let joints = model.joints();
+    let n = joints.len();
     let g = model.gravity();
+    let Data {
+        joint_frame,
+        subspace,
+        joint_qdd_prescribed,
+        body_inertia,
+        body_twist,
+        body_com,
+        body_accel_vp,
+        body_accel,
+        body_wrench,
+        joint_effort,
+        udot,
+        tree_accel,
+        ..
+    } = data;
+    // The free coordinates' accelerations, or none (`u̇ = 0`: the prescribed `q̈_p`, zero
+    // for a free joint, stand in).
+    let free_accel: Option<&[Real]> = match accel {
+        FreeAccel::Zero => None,
+        FreeAccel::Given(udot) => Some(udot),
+        FreeAccel::Solved if model.is_holonomic() => Some(udot.as_slice()),
+        FreeAccel::Solved => Some(tree_accel.as_slice()),
+    };
+    // Sliced to the number of joints once: no bounds checks in the loops.
+    let (joint_frame, subspace) = (&joint_frame[..n], &subspace[..n]);
+    let joint_qdd_prescribed = &joint_qdd_prescribed[..n];
+    let (body_inertia, body_twist, body_com) =
+        (&body_inertia[..n], &body_twist[..n], &body_com[..n]);
+    let body_accel_vp = &body_accel_vp[..n];
+    let (body_accel, body_wrench) = (&mut body_accel[..n], &mut body_wrench[..n]);
+    let joint_effort = &mut joint_effort[..n];
     // Forward: accelerations and the net wrench each body needs.
     for (i, joint) in joints.iter().enumerate() {
         let mut a = match joint.parent {
-            Some(p) => data.body_accel[p.index()],
+            Some(p) => body_accel[p.index()],
             None => Twist::ZERO,
         };
         if joint.is_absolute() {
-            a = a.projected_at(data.joint_frame[i].translation);
+            a = a.projected_at(joint_frame[i].translation);
         }
-        a += data.body_accel_vp[i];
-        let qdd = data.joint_qdd_prescribed[i];
-        let free = model.q_index(JointId(i));
-        for k in 0..joint.kind.ndof() {
-            let acc = match (free, accel) {
-                (None, _) | (_, FreeAccel::Zero) => qdd[k],
-                (Some(s), FreeAccel::Given(udot)) => udot[s + k],
-                (Some(s), FreeAccel::Solved) if model.is_holonomic() => data.udot[s + k],
-                (Some(s), FreeAccel::Solved) => data.tree_accel[s + k],
-            };
-            a += data.subspace[i][k] * acc;
+        a += body_accel_vp[i];
+        let nd = joint.kind.ndof();
+        let s = subspace[i].iter().take(nd);
+        match (model.q_index(JointId(i)), free_accel) {
+            (Some(first), Some(acc)) => {
+                for (s_k, acc_k) in s.zip(&acc[first..first + nd]) {
+                    a += *s_k * *acc_k;
+                }
+            }
+            _ => {
+                for (s_k, qdd_k) in s.zip(&joint_qdd_prescribed[i]) {
+                    a += *s_k * *qdd_k;
+                }
+            }
         }
-        let inertia = &data.body_inertia[i];
-        let v = &data.body_twist[i];
-        let weight = Wrench::force_at(g * inertia.m, data.body_com[i]);
-        data.body_accel[i] = a;
-        data.body_wrench[i] = inertia.mul_twist(&a) + v.cross_force(&inertia.mul_twist(v)) - weight;
+        let inertia = &body_inertia[i];
+        let v = &body_twist[i];
+        let weight = Wrench::force_at(g * inertia.m, body_com[i]);
+        body_accel[i] = a;
+        body_wrench[i] = inertia.mul_twist(&a) + v.cross_force(&inertia.mul_twist(v)) - weight;
     }
     // Backward: joint efforts, and the wrench passed on to the parent.
-    for i in (0..joints.len()).rev() {
-        let f = data.body_wrench[i];
-        for k in 0..joints[i].kind.ndof() {
-            data.joint_effort[i][k] = data.subspace[i][k].dot(&f);
+    for (i, joint) in joints.iter().enumerate().rev() {
+        let f = body_wrench[i];
+        let nd = joint.kind.ndof();
+        for (e_k, s_k) in joint_effort[i].iter_mut().zip(&subspace[i]).take(nd) {
+            *e_k = s_k.dot(&f);
         }
-        if let Some(p) = joints[i].parent {
-            let f = if joints[i].is_absolute() {
-                f.projected_at(data.joint_frame[i].translation)
+        if let Some(p) = joint.parent {
+            let f = if joint.is_absolute() {
+                f.projected_at(joint_frame[i].translation)
             } else {
                 f
             };
-            data.body_wrench[p.index()] += f;
+            body_wrench[p.index()] += f;
         }
     }
 }
@@ -629,14 +688,24 @@ fn newton_euler(model: &Model, data: &mut Data, accel: FreeAccel<'_>) {
 /// Writes the generalized forces of the free coordinates, `out = effort − Q_force` with
 /// `Q_force = −k (q − q_rest) − c q̇ + τ` the joint force elements.
 fn gather_free(model: &Model, data: &Data, out: &mut [Real]) {
-    for (i, joint) in model.joints().iter().enumerate() {
+    let joints = model.joints();
+    let n = joints.len();
+    let (joint_effort, joint_q, joint_qd) = (
+        &data.joint_effort[..n],
+        &data.joint_q[..n],
+        &data.joint_qd[..n],
+    );
+    for (i, joint) in joints.iter().enumerate() {
         if let Some(s) = model.q_index(JointId(i)) {
-            let nd = joint.kind.ndof();
-            out[s..s + nd].copy_from_slice(&data.joint_effort[i][..nd]);
-            if joint.kind.ndof() == 1 {
-                out[s] -= joint
-                    .force
-                    .generalized_force(data.joint_q[i][0], data.joint_qd[i][0]);
+            let e = &joint_effort[i];
+            // Entry by entry: `copy_from_slice` of an unknown length calls `memcpy`.
+            match &mut out[s..s + joint.kind.ndof()] {
+                [o0] => {
+                    *o0 = e[0] - joint.force.generalized_force(joint_q[i][0], joint_qd[i][0]);
+                }
+                [o0, o1] => [*o0, *o1] = [e[0], e[1]],
+                [o0, o1, o2] => [*o0, *o1, *o2] = [e[0], e[1], e[2]],
+                _ => {}
             }
         }
     }
@@ -774,8 +843,18 @@ pub fn forward_dynamics_with(
     bias_forces(model, data);
     factor_mass(model, data, t)?;
     // u̇ = M⁻¹ (τ − h).
-    for r in 0..model.nu() {
-        data.udot[r] = tau.map_or(0.0, |tau| tau[r]) - data.bias[r];
+    let (udot, bias) = (data.udot.as_mut_slice(), data.bias.as_slice());
+    match tau {
+        Some(tau) => {
+            for ((x, t), h) in udot.iter_mut().zip(tau).zip(bias) {
+                *x = t - h;
+            }
+        }
+        None => {
+            for (x, h) in udot.iter_mut().zip(bias) {
+                *x = 0.0 - h;
+            }
+        }
     }
     data.mass_factor.solve_in_place(data.udot.as_mut_slice())?;
     check_finite(t, "udot", data.udot.as_slice())?;
@@ -961,14 +1040,18 @@ pub fn energy(
 /// Newton–Euler scratch, leaving the drive efforts in `data.joint_effort`.
 pub fn power(model: &Model, data: &mut Data) -> Power {
     let mut p = Power::default();
-    for (i, joint) in model.joints().iter().enumerate() {
+    let joints = model.joints();
+    let joint_qd = &data.joint_qd[..joints.len()];
+    let mut driven = false;
+    for (joint, qd) in joints.iter().zip(joint_qd) {
         if joint.drive.is_none() && joint.kind.ndof() == 1 {
-            let qd = data.joint_qd[i][0];
+            let qd = qd[0];
             p.damping -= joint.force.damping * qd * qd;
             p.applied += joint.force.effort * qd;
         }
+        driven |= joint.drive.is_some();
     }
-    if model.has_prescribed_motion() {
+    if driven {
         newton_euler(model, data, FreeAccel::Solved);
         for (i, joint) in model.joints().iter().enumerate() {
             if joint.drive.is_some() {

@@ -142,9 +142,20 @@ pub fn update_positions(
 ) -> Result<(), KinematicsError> {
     check_len("q", model.nq(), q.len())?;
     data.time = t;
-    for (i, joint) in model.joints().iter().enumerate() {
+    let joints = model.joints();
+    let n = joints.len();
+    // Every per-joint array sliced to the number of joints once, so that the loop indexes
+    // them without bounds checks.
+    let bodies = &model.bodies()[..n];
+    let joint_q = &mut data.joint_q[..n];
+    let joint_qdd = &mut data.joint_qdd_prescribed[..n];
+    let joint_frame = &mut data.joint_frame[..n];
+    let subspace = &mut data.subspace[..n];
+    let body_pose = &mut data.body_pose[..n];
+    let body_com = &mut data.body_com[..n];
+    let body_inertia = &mut data.body_inertia[..n];
+    for (i, (joint, body)) in joints.iter().zip(bodies).enumerate() {
         // Joint coordinates: from the drive, from q, or none.
-        let nd = joint.kind.ndof();
         let mut jq = [0.0; 3];
         let mut jqdd = [0.0; 3];
         match (&joint.drive, model.q_index(JointId(i))) {
@@ -152,13 +163,13 @@ pub fn update_positions(
                 jq[0] = drive.position(t);
                 jqdd[0] = drive.acceleration(t);
             }
-            (None, Some(s)) => jq[..nd].copy_from_slice(&q[s..s + nd]),
+            (None, Some(s)) => copy_dofs(&mut jq, q, s, joint.kind.ndof()),
             (None, None) => {}
         }
         // Joint frame in the world.
         let parent = joint
             .parent
-            .map_or(Pose::IDENTITY, |p| data.body_pose[p.index()]);
+            .map_or(Pose::IDENTITY, |p| body_pose[p.index()]);
         let frame = if joint.is_absolute() {
             Pose::from_parts(
                 parent.transform_point(joint.placement.translation),
@@ -174,20 +185,32 @@ pub fn update_positions(
             s[0] = Twist::translation_along(pose.transform_vector(Vec2::X));
             s[1] = Twist::translation_along(pose.transform_vector(Vec2::Y));
         }
-        let body = &model.bodies()[i];
         let com = pose.transform_point(body.com);
-        data.joint_q[i] = jq;
-        data.joint_qdd_prescribed[i] = jqdd;
-        data.joint_frame[i] = frame;
-        data.subspace[i] = s;
-        data.body_pose[i] = pose;
-        data.body_com[i] = com;
-        data.body_inertia[i] = Inertia::from_body(body.mass, com, body.inertia);
+        joint_q[i] = jq;
+        joint_qdd[i] = jqdd;
+        joint_frame[i] = frame;
+        subspace[i] = s;
+        body_pose[i] = pose;
+        body_com[i] = com;
+        body_inertia[i] = Inertia::from_body(body.mass, com, body.inertia);
     }
     if !model.is_holonomic() {
         crate::constraints::update_map(model, data)?;
     }
     Ok(())
+}
+
+/// `dst[..nd] = src[s..s + nd]` for the `nd ≤ 3` coordinates (or rates) of one joint,
+/// entry by entry: `copy_from_slice` of a length unknown at compile time calls `memcpy`,
+/// dearer than the three moves.
+#[inline]
+fn copy_dofs(dst: &mut [Real; 3], src: &[Real], s: usize, nd: usize) {
+    match src[s..s + nd] {
+        [a] => dst[0] = a,
+        [a, b] => [dst[0], dst[1]] = [a, b],
+        [a, b, c] => *dst = [a, b, c],
+        _ => {}
+    }
 }
 
 /// The body pose `frame · motion(q)` and the motion subspace columns (world, referred to
@@ -259,25 +282,32 @@ pub fn update_velocities(
 pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
     let u = v_tree;
     let t = data.time;
-    for (i, joint) in model.joints().iter().enumerate() {
+    let joints = model.joints();
+    let n = joints.len();
+    // Sliced to the number of joints once: no bounds checks in the loop.
+    let joint_frame = &data.joint_frame[..n];
+    let subspace = &data.subspace[..n];
+    let body_pose = &data.body_pose[..n];
+    let joint_qd = &mut data.joint_qd[..n];
+    let body_twist = &mut data.body_twist[..n];
+    let body_twist_remainder = &mut data.body_twist_remainder[..n];
+    let body_accel_vp = &mut data.body_accel_vp[..n];
+    for (i, joint) in joints.iter().enumerate() {
         // Joint rates.
         let nd = joint.kind.ndof();
         let mut qd = [0.0; 3];
         let prescribed = joint.drive.is_some();
         match (&joint.drive, model.q_index(JointId(i))) {
             (Some(drive), _) => qd[0] = drive.velocity(t),
-            (None, Some(s)) => qd[..nd].copy_from_slice(&u[s..s + nd]),
+            (None, Some(s)) => copy_dofs(&mut qd, u, s, nd),
             (None, None) => {}
         }
         // What the parent carries: all of its twist, or only the velocity of `a`.
         let (vp, vp_rem) = match joint.parent {
-            Some(p) => (
-                data.body_twist[p.index()],
-                data.body_twist_remainder[p.index()],
-            ),
+            Some(p) => (body_twist[p.index()], body_twist_remainder[p.index()]),
             None => (Twist::ZERO, Twist::ZERO),
         };
-        let a = data.joint_frame[i].translation;
+        let a = joint_frame[i].translation;
         let a_dot = vp.velocity_at(a);
         let (mut v, mut v_rem, mut c) = if joint.is_absolute() {
             // Ṗ V_parent = (0, ω_parent perp(ȧ)).
@@ -289,20 +319,22 @@ pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
         } else {
             (vp, vp_rem, Twist::ZERO)
         };
-        // Joint motion: V += S q̇.
-        let s = &data.subspace[i];
-        for k in 0..nd {
-            v += s[k] * qd[k];
-            if prescribed {
-                v_rem += s[k] * qd[k];
+        // Joint motion: V += S q̇ (and the remainder, for a prescribed joint).
+        let s = &subspace[i];
+        for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
+            v += *s_k * *qd_k;
+        }
+        if prescribed {
+            for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
+                v_rem += *s_k * *qd_k;
             }
         }
         // c += Ṡ q̇.
         match joint.kind {
             JointKind::Revolute { .. } => c += Twist::new(0.0, -perp(a_dot)) * qd[0],
             JointKind::Prismatic { .. } | JointKind::Translation => {
-                for k in 0..nd {
-                    c += vp.cross_motion(&s[k]) * qd[k];
+                for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
+                    c += vp.cross_motion(s_k) * *qd_k;
                 }
             }
             JointKind::Planar => {
@@ -312,17 +344,17 @@ pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
                 } else {
                     vp
                 };
-                let o = data.body_pose[i].translation;
+                let o = body_pose[i].translation;
                 c += turns.cross_motion(&s[0]) * qd[0];
                 c += turns.cross_motion(&s[1]) * qd[1];
                 c += Twist::new(0.0, -perp(v.velocity_at(o))) * qd[2];
             }
             JointKind::Fixed => {}
         }
-        data.joint_qd[i] = qd;
-        data.body_twist[i] = v;
-        data.body_twist_remainder[i] = v_rem;
-        data.body_accel_vp[i] = c;
+        joint_qd[i] = qd;
+        body_twist[i] = v;
+        body_twist_remainder[i] = v_rem;
+        body_accel_vp[i] = c;
     }
 }
 
