@@ -148,8 +148,15 @@ pub fn frame_of(
     } = contact;
     // The Jacobian and velocity of each witness point (zero on the world).
     let (va, rem_a) = side(model, data, p.a, point_a, &mut ws.jac_a)?;
-    let (vb, rem_b) = side(model, data, p.b, point_b, &mut ws.jac_b)?;
-    let (v_r, v_rem) = (va - vb, rem_a - rem_b);
+    let on_world = model.colliders()[p.b.index()].body.is_none();
+    let (v_r, v_rem) = if on_world {
+        // `x − 0 = x` to the bit (−0 − 0 = −0 too): the rows of `a` alone are the same
+        // numbers as the differences with the world's zero rows.
+        (va, rem_a)
+    } else {
+        let (vb, rem_b) = side(model, data, p.b, point_b, &mut ws.jac_b)?;
+        (va - vb, rem_a - rem_b)
+    };
     let n = -normal;
     let t = if tangent == Tangent::Perp || v_r.dot(perp(n)) >= 0.0 {
         perp(n)
@@ -157,10 +164,14 @@ pub fn frame_of(
         -perp(n)
     };
     for r in 0..model.nu() {
-        let col = Vec2::new(
-            ws.jac_a[(0, r)] - ws.jac_b[(0, r)],
-            ws.jac_a[(1, r)] - ws.jac_b[(1, r)],
-        );
+        let col = if on_world {
+            Vec2::new(ws.jac_a[(0, r)], ws.jac_a[(1, r)])
+        } else {
+            Vec2::new(
+                ws.jac_a[(0, r)] - ws.jac_b[(0, r)],
+                ws.jac_a[(1, r)] - ws.jac_b[(1, r)],
+            )
+        };
         j_n[r] = n.dot(col);
         j_t[r] = t.dot(col);
     }

@@ -21,5 +21,9 @@ pub use frame::{
 };
 pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
 pub use manifold::{
-    ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points, contact_points_of,
+    ClosedVertex, ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points,
+    contact_points_of, is_plane_pair,
 };
+
+#[cfg(test)]
+pub(crate) use manifold::tests as manifold_tests;

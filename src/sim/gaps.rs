@@ -364,13 +364,16 @@ impl GapFunctions<'_> {
         self.open_gap_here(pair, t)
     }
 
-    /// The other point of a pair with one closed point at `local`: of its (at most two)
+    /// The other point of the pair of closed point `i`, its only one: of its (at most two)
     /// candidates, the one farther from the closed point (which moves on `a` as it slides
     /// or rolls). At the positions of `self.data`.
-    fn other_point(&mut self, pair: PairId, local: Vec2) -> Result<Option<PairContact>, Nested> {
+    fn other_point(&mut self, i: usize) -> Result<Option<PairContact>, Nested> {
+        let (model, c) = (self.model, self.persistent.closed()[i]);
+        let (pair, local) = (c.pair, c.local);
+        // The pair as the closed points looked it up (once per set of them).
+        let p = self.persistent.closed_pair(model, &self.data, i)?;
         let candidates =
-            self.scratch
-                .candidates(self.model, &self.data, pair, self.scales.length)?;
+            (self.scratch).candidates_of(model, &self.data, (pair, &p), self.scales.length)?;
         self.here.points = candidates.clone();
         Ok(match candidates.as_slice() {
             [x, y] if (x.1 - local).length() <= (y.1 - local).length() => Some(y.0),
@@ -392,12 +395,12 @@ impl GapFunctions<'_> {
     fn gap_contact(&mut self, pair: PairId, t: Real) -> Result<Option<PairContact>, Nested> {
         let model = self.model;
         let closed = self.persistent.closed();
-        let mut on_pair = closed.iter().filter(|c| c.pair == pair);
-        let (first, second) = (on_pair.next().map(|c| c.local), on_pair.next());
+        let mut on_pair = (closed.iter().enumerate()).filter(|(_, c)| c.pair == pair);
+        let (first, second) = (on_pair.next().map(|(i, _)| i), on_pair.next());
         match (first, second) {
             (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
                 .map_err(|e| Nested::from(e.at(t))),
-            (Some(local), None) => self.other_point(pair, local),
+            (Some(i), None) => self.other_point(i),
             (Some(_), Some(_)) => Ok(None),
         }
     }
