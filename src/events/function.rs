@@ -28,6 +28,25 @@ pub trait EventFunctions {
         self.values(t, y, g)
     }
 
+    /// Writes `ġᵢ(t, y)` at an interior sample of a step's regular sampling, after
+    /// [`interior_values`](EventFunctions::interior_values) at the same `t`, like
+    /// [`rates`](EventFunctions::rates). A function that got a positive stand-in there
+    /// (it cannot reach zero anywhere in the step) may get any rate `ġᵢ ≥ 0`: the
+    /// locator searches a dip between two samples only where `ġ` goes from `< 0` to
+    /// `> 0`, and a function without event in the step needs none, so a zero rate there
+    /// changes no result. A caller with stand-ins should supply rates (the numerical
+    /// difference of the default would mix a stand-in with a value). The default is
+    /// [`rates`](EventFunctions::rates).
+    fn interior_rates(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        dy: &[Real],
+        g_dot: &mut [Real],
+    ) -> Result<bool, Self::Error> {
+        self.rates(t, y, dy, g_dot)
+    }
+
     /// `gᵢ(t, y)` of the one function `i` (a root or extremum search follows one
     /// function): the same number as [`values`](EventFunctions::values) gives it. The
     /// default computes them all into `g` (of length `m`) and returns `g[i]`.

@@ -232,6 +232,28 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
         if self.caller_rates(t)? {
             return Ok(());
         }
+        self.difference_rates(t)
+    }
+
+    /// [`rates`](Self::rates) at an interior sample, after
+    /// [`interior_values`](Self::interior_values) at the same `t`: the caller's
+    /// [`EventFunctions::interior_rates`] (stand-ins allowed), else the difference.
+    fn interior_rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+        self.derivative_at(t);
+        let given = self
+            .funcs
+            .interior_rates(t, &self.s.y, &self.s.dy, &mut self.s.gd)
+            .map_err(|source| EventError::Function { t, source })?;
+        if given {
+            self.counters.rate_evals += 1;
+            return Ok(());
+        }
+        self.difference_rates(t)
+    }
+
+    /// `ġ(t)` into `scratch.gd` by a one-sided difference of `g` along the dense output
+    /// (see [`rates`](Self::rates)).
+    fn difference_rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
         let st = self.stepper;
         let (t0, t1) = (st.t_prev(), st.t());
         let delta = (Real::EPSILON.sqrt() * (t1 - t0)).max(16.0 * Real::EPSILON * t.abs());
@@ -441,7 +463,7 @@ impl EventLocator {
 }
 
 /// Stage 1: `g` at the `k + 2` sample times (the interior ones through
-/// [`EventFunctions::interior_values`]), and `ġ` where it is needed (everywhere with the
+/// [`EventFunctions::interior_values`] and [`EventFunctions::interior_rates`]), and `ġ` where it is needed (everywhere with the
 /// extremum search; else at the start, if an armed function is not positive there).
 fn sample<St: Stepper, G: EventFunctions>(
     sp: &mut Sampler<'_, St, G>,
@@ -469,7 +491,11 @@ fn sample<St: Stepper, G: EventFunctions>(
         let at_contact = j == 0 && sp.s.g.iter().zip(armed).any(|(g, &a)| a && *g <= 0.0);
         smp.known[j] = settings.extremum_search || at_contact;
         if smp.known[j] {
-            sp.rates(t)?;
+            if j == 0 || j == parts {
+                sp.rates(t)?;
+            } else {
+                sp.interior_rates(t)?;
+            }
             check_finite(&sp.s.gd, armed, t)?;
             smp.gds[j * m..(j + 1) * m].copy_from_slice(&sp.s.gd);
         }

@@ -136,10 +136,40 @@ impl Here {
 /// (the step's end, root searches, the settling) check the bound, `g ≥ lo / 2`; if one
 /// fails, [`GapFunctions::stand_ins_failed`] tells the loop to locate again without
 /// stand-ins.
+///
+/// The slip velocity `s V_t + margin` of a sliding point gets a stand-in by the same rule:
+/// the right-hand side computes `V_t` at every stage too ([`Persistent::bounds`]).
+///
+/// The gap of a candidate pair (slot 0) gets one from its value `g₀` at the step's start
+/// and the speed bound `V₀ = V_a + V_b` there, the rotation bound of the broad phase
+/// (`broad::reach`: `|v_G| + |ω| (|c − G| + r)` of each collider, which holds as a body
+/// turns): a gap changes no faster than the relative speed of the shapes' points, so
+/// `g(t) ≥ g₀ − V̄ (t − t₀)` while that speed stays below `V̄`. With
+///
+/// ```text
+/// V̄ = 2 (V₀ + |g| h),    g₀ > 2 V̄ h
+/// ```
+///
+/// (`h` the step, `|g|` gravity: twice what the start's speed and a free fall give), the
+/// gap stays above `g₀ / 2` for speeds up to `2 V̄` everywhere in the step. The exact
+/// evaluations check it a posteriori like the forces' bound: the gap `g ≥ g₀ / 2` and the
+/// speed bound `V ≤ V̄` (the step's end is one: every step checks it). A pair with two
+/// closed points has no gap function (a constant). When every function of the candidates
+/// has a stand-in, an interior sample computes nothing, no kinematics, and its rates are
+/// zero ([`EventFunctions::interior_rates`]): the far end of Kane's pendulum and its
+/// sliding tip, most of its run.
 /// Whether a function whose values at a step's start and stages lie in `[lo, hi]` stays
 /// positive over the step (see [`StandIns`]): `lo > 4 (hi − lo)`.
 fn stays_positive(lo: Real, hi: Real) -> bool {
     lo > 0.0 && lo > 4.0 * (hi - lo)
+}
+
+/// The speed bound `V̄ = 2 (V₀ + |g| h)` over a step of length `h` of a pair whose speed
+/// bound is `v0` at its start, under gravity `grav`, if its gap `g0` at the start cannot
+/// close in the step by it, `g₀ > 2 V̄ h` (see [`StandIns`]).
+fn gap_stays_positive(g0: Real, v0: Real, grav: Real, h: Real) -> Option<Real> {
+    let v_bar = 2.0 * (v0 + grav * h);
+    (v0 >= 0.0 && v_bar.is_finite() && g0 > 2.0 * v_bar * h).then_some(v_bar)
 }
 
 /// What the stand-ins of the force functions did in a run (see [`StandIns`]).
@@ -154,18 +184,52 @@ pub struct StandInCounts {
     /// Exact samples that took the right-hand side's evaluation of the step's end (see
     /// [`GapFunctions::take_end_evaluation`]) instead of solving the forces again.
     pub taken: u64,
+    /// Interior samples (with closed points or not) whose every function had a stand-in:
+    /// nothing computed, no kinematics.
+    pub skipped: u64,
+    /// Steps in which a candidate's gap got no stand-in because it could close in the
+    /// step by its bound (its speed known).
+    pub gaps_refused: u64,
+}
+
+/// What the interior samples of a step compute (see [`StandIns`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Interior {
+    /// Every function.
+    Exact,
+    /// The gaps and slips, with stand-ins for the force functions.
+    Kinematic,
+    /// Nothing: a stand-in for every function.
+    Nothing,
 }
 
 #[derive(Default)]
 struct StandIns {
     /// `(lo, hi)` of each closed point's force functions over the step's stages.
     stages: Vec<[(Real, Real); 3]>,
-    /// Decided for this step: `Some(true)` when every force function cannot reach zero.
-    decided: Option<bool>,
-    /// `lo` of each force function, with the start's value (NaN for a slip function).
+    /// Decided for this step: what the interior samples compute.
+    decided: Option<Interior>,
+    /// `lo` of each force function, with the start's value (NaN for a slip function
+    /// without a stand-in).
     lo: Vec<[Real; 3]>,
+    /// The step `[t0, t1]` being located.
+    t0: Real,
+    t1: Real,
+    /// The speed bound `V₀` of each candidate pair at the step's start (NaN: unknown), from
+    /// the rates there.
+    v0: Vec<Real>,
+    /// For each candidate, `(g₀, V̄)` if its gap has a stand-in (NaN: none).
+    gap: Vec<(Real, Real)>,
+    /// The time of the last interior sample that computed nothing (NaN: none), for its
+    /// rates.
+    nothing_at: Real,
     /// Whether an interior sample of this step used them.
     used: bool,
+    /// Whether an interior sample of this step used the gaps' stand-ins.
+    gaps_used: bool,
+    /// The time of the last check of the gaps' speed bounds (NaN: none): the values and
+    /// the rates of a sample check them once.
+    checked_at: Real,
     /// Whether an exact value broke the bound after they were used.
     failed: bool,
     /// Never use them (the oracle of the tests: `Simulation::set_stand_ins(false)`).
@@ -262,24 +326,36 @@ impl<'m> GapFunctions<'m> {
         self.end.forget();
     }
 
-    /// Starts the event location of a step whose right-hand sides gave the force
-    /// functions the bounds `stages` ([`Persistent::bounds`] of the ODE system, whose
-    /// closed points are these). Empty: no stand-ins.
-    pub fn begin_step(&mut self, stages: &[[(Real, Real); 3]]) {
+    /// Starts the event location of the step `[t0, t1]` whose right-hand sides gave the
+    /// force functions the bounds `stages` ([`Persistent::bounds`] of the ODE system, whose
+    /// closed points are these). `stand_ins` false: none in this step.
+    pub fn begin_step(
+        &mut self,
+        stages: &[[(Real, Real); 3]],
+        (t0, t1): (Real, Real),
+        stand_ins: bool,
+    ) {
         let s = &mut self.stand_ins;
         s.stages.clear();
         s.stages.extend_from_slice(stages);
-        s.decided = None;
+        s.decided = (!stand_ins).then_some(Interior::Exact);
         if s.failed {
             s.counts.relocated += 1;
         }
+        (s.t0, s.t1) = (t0, t1);
+        s.v0.clear();
+        s.v0.resize(self.candidates.len(), Real::NAN);
+        s.gap.clear();
+        s.nothing_at = Real::NAN;
+        s.checked_at = Real::NAN;
         s.used = false;
+        s.gaps_used = false;
         s.failed = false;
     }
 
     /// Whether an exact evaluation in this step broke the bound of a stand-in used at an
     /// interior sample: the step must be located again without them
-    /// (`begin_step(&[])`).
+    /// (`begin_step` with `stand_ins` false).
     pub fn stand_ins_failed(&self) -> bool {
         self.stand_ins.failed
     }
@@ -312,6 +388,9 @@ impl<'m> GapFunctions<'m> {
         (here.candidates).reserve(pairs.saturating_sub(here.candidates.len()));
         (here.contacts).reserve(pairs.saturating_sub(here.contacts.len()));
         (here.candidate_points).reserve(pairs.saturating_sub(here.candidate_points.len()));
+        let s = &mut self.stand_ins;
+        s.v0.reserve(pairs.saturating_sub(s.v0.len()));
+        s.gap.reserve(pairs.saturating_sub(s.gap.len()));
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -491,45 +570,110 @@ impl GapFunctions<'_> {
         Ok(())
     }
 
-    /// Whether every force function of the closed points cannot reach zero in this step
-    /// (see [`StandIns`]); decided once per step, from the stages' bounds and the exact
-    /// values at the step's start (the last exact evaluation, `self.memo`).
-    fn stand_ins_allowed(&mut self) -> bool {
-        if let Some(allowed) = self.stand_ins.decided {
-            return allowed;
+    /// What the interior samples of this step compute (see [`StandIns`]); decided once per
+    /// step, from the stages' bounds, the exact values at the step's start (the last
+    /// exact evaluation, `self.memo`) and the speed bounds there (from its rates).
+    fn interior(&mut self) -> Interior {
+        if let Some(decided) = self.stand_ins.decided {
+            return decided;
         }
         let closed = self.persistent.closed();
         let s = &mut self.stand_ins;
-        let start_known = !self.memo.g.is_empty()
+        let start_known = !s.off
+            && self.memo.t == s.t0
+            && self.memo.g.len() == SLOTS * self.candidates.len()
             && self.memo.candidates == self.candidates
             && self.memo.closed == closed;
-        let mut allowed =
-            !s.off && start_known && !closed.is_empty() && s.stages.len() == closed.len();
+        // The force functions (all or none: one of them costs the constrained dynamics),
+        // and the slips.
+        let mut forces = start_known && s.stages.len() == closed.len();
+        let mut slips = forces;
         s.lo.clear();
         for (i, (c, stages)) in closed.iter().zip(&s.stages).enumerate() {
-            if !allowed {
+            if !forces {
                 break;
             }
             let Some(at) = self.candidates.binary_search(&c.pair).ok() else {
-                allowed = false;
+                forces = false;
                 break;
             };
             let j = rank(&self.persistent, i);
             let mut lo = [Real::NAN; 3];
             for (f, (&(a, b), l)) in stages.iter().zip(&mut lo).enumerate() {
-                if f == 1 && matches!(c.hold, Hold::Slide(_)) {
-                    continue; // the slip velocity: computed at every sample
-                }
                 let start = self.memo.g[SLOTS * at + 1 + f + 3 * j];
-                *l = a.min(start);
-                if !(a <= b && stays_positive(*l, b.max(start))) {
-                    allowed = false;
+                let ok = a <= b && stays_positive(a.min(start), b.max(start));
+                if f == 1 && matches!(c.hold, Hold::Slide(_)) {
+                    // The slip velocity: a stand-in of its own, else computed.
+                    slips &= ok;
+                    if !ok {
+                        continue;
+                    }
                 }
+                *l = a.min(start);
+                forces &= ok;
             }
             s.lo.push(lo);
         }
-        s.decided = Some(allowed);
-        allowed
+        // The gaps.
+        let mut gaps = start_known && s.v0.len() == self.candidates.len();
+        s.gap.clear();
+        if gaps {
+            let (h, grav) = (s.t1 - s.t0, self.model.gravity().length());
+            for (r, &pair) in self.candidates.iter().enumerate() {
+                let g0 = self.memo.g[SLOTS * r];
+                let both_closed = closed.iter().filter(|c| c.pair == pair).count() >= 2;
+                let bound = if both_closed {
+                    // No gap function: the constant `scales.length`.
+                    Some(Real::INFINITY)
+                } else {
+                    gap_stays_positive(g0, s.v0[r], grav, h)
+                };
+                match bound {
+                    Some(v_bar) => s.gap.push((g0, v_bar)),
+                    None => {
+                        s.gap.push((Real::NAN, Real::NAN));
+                        gaps = false;
+                    }
+                }
+            }
+            if !gaps {
+                s.counts.gaps_refused += 1;
+            }
+        }
+        let decided = match (closed.is_empty() || forces, gaps && slips) {
+            (true, true) => Interior::Nothing,
+            (true, false) if !closed.is_empty() => Interior::Kinematic,
+            _ => Interior::Exact,
+        };
+        s.decided = Some(decided);
+        decided
+    }
+
+    /// The values at an interior sample where every function has a stand-in (see
+    /// [`StandIns`]): nothing computed.
+    fn values_of_nothing(&mut self, t: Real, g: &mut [Real]) {
+        g.fill(self.scales.length);
+        let s = &mut self.stand_ins;
+        for (r, &(g0, _)) in s.gap.iter().enumerate() {
+            if g0.is_finite() {
+                g[SLOTS * r] = g0;
+            }
+        }
+        let closed = self.persistent.closed();
+        for (i, c) in closed.iter().enumerate() {
+            let j = rank(&self.persistent, i);
+            let at = SLOTS * self.candidates.binary_search(&c.pair).unwrap_or(0);
+            for (f, &l) in s.lo[i].iter().enumerate() {
+                g[at + 1 + f + 3 * j] = l;
+            }
+        }
+        if !closed.is_empty() {
+            s.used = true;
+            s.counts.used += 1;
+        }
+        s.gaps_used = true;
+        s.nothing_at = t;
+        s.counts.skipped += 1;
     }
 
     /// The values at an interior sample with the force functions' stand-ins: the gaps
@@ -551,6 +695,7 @@ impl GapFunctions<'_> {
             g[at + 1 + 3 * j] = lo[0];
             g[at + 2 + 3 * j] = match c.hold {
                 Hold::Stick => lo[1],
+                Hold::Slide(_) if !lo[1].is_nan() => lo[1],
                 Hold::Slide(s) => {
                     // The pair's contact points found for its gap (its only closed
                     // point), or a query.
@@ -588,10 +733,55 @@ impl GapFunctions<'_> {
         Ok(())
     }
 
-    /// After an exact evaluation: whether a force function that had a stand-in in this
-    /// step broke its bound `g ≥ lo / 2` (see [`StandIns`]).
+    /// The speed bound `V_a + V_b` of the points of `pair` (`broad::reach`), at the
+    /// positions and velocities of `self.data`.
+    fn pair_speed(&self, pair: PairId) -> Real {
+        let p = self.model.pair_of(pair);
+        let reach = |c| super::broad::reach(self.model, &self.data, c).0;
+        reach(p.a) + reach(p.b)
+    }
+
+    /// At the positions and velocities of `self.data` at `t`, an exact state of the step:
+    /// the speed bounds `V₀` of the candidates at the step's start, or elsewhere in it
+    /// whether a gap that had a stand-in broke its speed bound `V ≤ V̄` (see
+    /// [`StandIns`]).
+    fn speeds_at(&mut self, t: Real) {
+        let s = &self.stand_ins;
+        if s.off || s.failed {
+            return;
+        }
+        if t == s.t0 {
+            if s.decided.is_none()
+                && s.v0.len() == self.candidates.len()
+                && s.v0.iter().any(|v| v.is_nan())
+            {
+                for r in 0..self.candidates.len() {
+                    let v = self.pair_speed(self.candidates[r]);
+                    self.stand_ins.v0[r] = v;
+                }
+            }
+        } else if s.gaps_used && t > s.t0 && t <= s.t1 && t != s.checked_at {
+            self.stand_ins.checked_at = t;
+            let s = &self.stand_ins;
+            let failed = (s.gap.iter().enumerate()).any(|(r, &(_, v_bar))| {
+                v_bar.is_finite() && !self.pair_speed(self.candidates[r]).le(&v_bar)
+            });
+            self.stand_ins.failed |= failed;
+        }
+    }
+
+    /// After an exact evaluation: whether a function that had a stand-in in this step
+    /// broke its bound, `g ≥ lo / 2` of a force or slip function, `g ≥ g₀ / 2` of a gap
+    /// (see [`StandIns`]).
     fn check_stand_ins(&mut self, g: &[Real]) {
         let s = &mut self.stand_ins;
+        if s.gaps_used && !s.failed {
+            for (r, &(g0, _)) in s.gap.iter().enumerate() {
+                if g0.is_finite() && !(g.get(SLOTS * r).is_some_and(|&x| x >= 0.5 * g0)) {
+                    s.failed = true;
+                }
+            }
+        }
         if !s.used || s.failed {
             return;
         }
@@ -620,6 +810,20 @@ impl EventFunctions for GapFunctions<'_> {
         }
         self.values_here(t, y, g)?;
         self.check_stand_ins(g);
+        if self.stand_ins.gaps_used && !self.stand_ins.failed {
+            // The speed bounds of the gaps' stand-ins: the velocities, if the values did
+            // not need them (the rates at the same sample take them).
+            let model = self.model;
+            let (n, nqu) = (model.nq(), model.nq() + model.nu());
+            if !self.here.velocities {
+                update_velocities(model, &mut self.data, &y[n..nqu])
+                    .map_err(|e| Nested::from(e.at(t)))?;
+                self.here.velocities = true;
+                self.here.qu.truncate(n);
+                self.here.qu.extend_from_slice(&y[n..nqu]);
+            }
+            self.speeds_at(t);
+        }
         let mut memo = std::mem::take(&mut self.memo);
         memo.keep(self, t, y, g);
         self.memo = memo;
@@ -673,11 +877,30 @@ impl EventFunctions for GapFunctions<'_> {
         if !self.persistent.closed().is_empty() {
             self.stand_ins.counts.samples += 1;
         }
-        if self.stand_ins_allowed() {
-            self.values_with_stand_ins(t, y, g)
-        } else {
-            self.values(t, y, g)
+        match self.interior() {
+            Interior::Nothing => {
+                self.values_of_nothing(t, g);
+                Ok(())
+            }
+            Interior::Kinematic => self.values_with_stand_ins(t, y, g),
+            Interior::Exact => self.values(t, y, g),
         }
+    }
+
+    /// Zero rates after an interior sample that computed nothing (every function has a
+    /// positive stand-in, see [`StandIns`]), else [`EventFunctions::rates`].
+    fn interior_rates(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        dy: &[Real],
+        g_dot: &mut [Real],
+    ) -> Result<bool, Nested> {
+        if t == self.stand_ins.nothing_at {
+            g_dot.fill(0.0);
+            return Ok(true);
+        }
+        self.rates(t, y, dy, g_dot)
     }
 
     fn rates(
@@ -709,6 +932,7 @@ impl EventFunctions for GapFunctions<'_> {
                 self.here.qu.extend_from_slice(&y[n..nqu]);
             }
         }
+        self.speeds_at(t);
         g_dot.fill(0.0);
         for r in 0..self.candidates.len() {
             let pair = self.candidates[r];
@@ -754,7 +978,64 @@ impl GapFunctions<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::stays_positive;
+    use super::{gap_stays_positive, stays_positive};
+
+    /// A segment of half-length `r` spinning at `ω` about its centre, which falls from
+    /// height `d` at speed `v` (down) under gravity, above a floor: its gap is
+    /// `d − v t − ½ g t² − r |sin(θ₀ + ω t)|` exactly, and its rotation bound at the start is
+    /// `V₀ = |v| + |ω| r`. Over random steps `h`: wherever [`gap_stays_positive`] gives a
+    /// stand-in, the gap stays above half its start's value through the step (the a
+    /// posteriori check holds), so it never reaches zero; and a gap that does reach zero
+    /// in the step — a fast approach, a fast spin, a long step — is always refused, as is
+    /// one whose speed is unknown.
+    #[test]
+    fn a_gap_that_can_close_in_the_step_gets_no_stand_in() {
+        let grav = 9.81;
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut allowed, mut crossing) = (0, 0);
+        for _ in 0..100_000 {
+            let r = 0.01 + uniform();
+            let d = r * (1.0 + 3.0 * uniform()) + 0.5 * uniform();
+            let v = 20.0 * (uniform() - 0.3);
+            let w = 200.0 * (uniform() - 0.5);
+            let theta0 = 6.3 * uniform();
+            let h = 10f64.powf(-4.0 + 3.0 * uniform());
+            let gap = |t: f64| d - v * t - 0.5 * grav * t * t - r * (theta0 + w * t).sin().abs();
+            let g0 = gap(0.0);
+            let least = (0..=2_000)
+                .map(|k| gap(h * k as f64 / 2_000.0))
+                .fold(f64::INFINITY, f64::min);
+            let bound = gap_stays_positive(g0, v.abs() + w.abs() * r, grav, h);
+            if least <= 0.0 {
+                crossing += 1;
+                assert!(
+                    bound.is_none(),
+                    "d {d}, r {r}, v {v}, ω {w}, h {h}: a closing gap passed"
+                );
+            }
+            if bound.is_some() {
+                allowed += 1;
+                assert!(
+                    least >= 0.5 * g0,
+                    "d {d}, r {r}, v {v}, ω {w}, h {h}: below g₀/2"
+                );
+            }
+        }
+        assert!(
+            allowed > 10_000 && crossing > 1_000,
+            "{allowed} allowed, {crossing} crossing"
+        );
+        assert_eq!(gap_stays_positive(1.0, f64::NAN, grav, 1e-3), None);
+        assert_eq!(gap_stays_positive(-1.0, 0.0, grav, 1e-3), None);
+        // Kane's pendulum: its hinge 1.7 m above the floor, 1 m/s, a 25 ms step.
+        assert!(gap_stays_positive(1.7, 1.0, grav, 0.025).is_some());
+    }
 
     /// Random polynomials of degree ≤ 5 on a step `[0, 1]`, set by their values at
     /// DOPRI5's nodes (the step's start and its stages): wherever [`stays_positive`]

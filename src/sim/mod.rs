@@ -664,14 +664,16 @@ impl<'m> Simulation<'m> {
     /// [`Self::locate`] itself.
     fn locate_events(&mut self) -> Result<Option<Option<Event>>, SimError> {
         loop {
-            self.gaps.begin_step(self.system.persistent.bounds());
+            let step = (self.stepper.t_prev(), self.stepper.t());
+            self.gaps
+                .begin_step(self.system.persistent.bounds(), step, true);
             let mut located = self
                 .locator
                 .locate(&self.stepper, &mut self.gaps, &self.armed);
             if self.gaps.stand_ins_failed() {
-                // A force function left unsampled inside the step broke its bound: sample
+                // A function left unsampled inside the step broke its bound: sample
                 // it (see `gaps::StandIns`).
-                self.gaps.begin_step(&[]);
+                self.gaps.begin_step(&[], step, false);
                 located = self
                     .locator
                     .locate(&self.stepper, &mut self.gaps, &self.armed);

@@ -272,7 +272,8 @@ pub struct Persistent {
     modes: Vec<Mode>,
     reference: Vec<Real>,
     /// The least and largest values of each closed point's force functions over the
-    /// evaluations since the last [`Self::clear_bounds`] (see [`Self::force_functions`]):
+    /// evaluations since the last [`Self::clear_bounds`] (see [`Self::force_functions`];
+    /// the slip velocity `s V_t + margin` in place of a sliding point's friction margin):
     /// over the stages of a step, what the event location needs to know that a function
     /// cannot reach zero in it.
     bounds: Vec<[(Real, Real); 3]>,
@@ -646,7 +647,12 @@ impl Persistent {
             *a += d;
         }
         for i in 0..self.closed.len() {
-            let f = self.force_functions(i);
+            let mut f = self.force_functions(i);
+            if let Hold::Slide(s) = self.closed[i].hold {
+                // A sliding point's second function is its slip velocity (see `gaps::slot`).
+                f[1] = (self.ev.points.get(i))
+                    .map_or(Real::NAN, |p| s * p.v_t + self.closed[i].slip_margin);
+            }
             for (b, v) in self.bounds[i].iter_mut().zip(f) {
                 *b = (b.0.min(v), b.1.max(v));
             }
