@@ -54,9 +54,7 @@ impl<'s> Sweep<'s> {
         // holonomic scene; a nonholonomic one has its own, see `Model::speeds`).
         let names = |speeds: bool| -> Vec<String> {
             if speeds {
-                (scene.model.speeds().iter())
-                    .map(|s| s.name.clone())
-                    .collect()
+                speed_names(scene)
             } else {
                 coordinate_names(scene)
             }
@@ -116,16 +114,17 @@ impl<'s> Sweep<'s> {
     }
 
     /// The columns of the table: `run`, the parameters in the order given, then
-    /// [`RESULT_COLUMNS`], then the final state `t`, `q.<coordinate>`…, `u.<coordinate>`…,
-    /// and last `stop_detail`.
+    /// [`RESULT_COLUMNS`], then the final state `t`, `q.<coordinate>`…, `u.<speed>`… (the
+    /// coordinates' names for a holonomic scene, the speeds' own for a nonholonomic one:
+    /// `Model::speeds`), and last `stop_detail`.
     pub fn columns(&self) -> Vec<String> {
-        let names = coordinate_names(self.scene);
+        let (names, speeds) = (coordinate_names(self.scene), speed_names(self.scene));
         std::iter::once("run".to_owned())
             .chain(self.grid.params().iter().map(|p| p.param.to_string()))
             .chain(RESULT_COLUMNS.iter().map(|c| (*c).to_owned()))
             .chain(std::iter::once("t".to_owned()))
             .chain(names.iter().map(|c| format!("q.{c}")))
-            .chain(names.iter().map(|c| format!("u.{c}")))
+            .chain(speeds.iter().map(|c| format!("u.{c}")))
             .chain(std::iter::once("stop_detail".to_owned()))
             .collect()
     }
@@ -329,7 +328,15 @@ pub fn thread_pool(threads: Option<NonZeroUsize>) -> Result<rayon::ThreadPool, S
         .build()?)
 }
 
-/// The names of the model's coordinates, in the order of `q` and `u`.
+/// The names of the generalized speeds, in the order of `u`: the coordinates' names for a
+/// holonomic scene (`u = q̇`), their own for a nonholonomic one (`Model::speeds`).
+fn speed_names(scene: &Scene) -> Vec<String> {
+    (scene.model.speeds().iter())
+        .map(|s| s.name.clone())
+        .collect()
+}
+
+/// The names of the model's coordinates, in the order of `q`.
 fn coordinate_names(scene: &Scene) -> Vec<String> {
     scene
         .model

@@ -373,6 +373,66 @@ fn a_swept_initial_state_inside_an_obstacle_is_an_error_row() {
     assert_eq!(rows[1].stop(), "t_end");
 }
 
+/// A nonholonomic scene has fewer generalized speeds than coordinates (the Chaplygin
+/// sleigh: `q = (x, y, angle)`, `u = (vx_body, omega)`): its table has a `u.` column per
+/// speed, named after the speed, and holds the final state of a single run bit for bit.
+/// The columns used to repeat the coordinates for `u`, and every sweep of such a scene
+/// failed to write its table ("found record with 25 fields, but the previous record has
+/// 26 fields"), losing every run.
+#[test]
+fn a_nonholonomic_scene_has_a_column_per_speed() {
+    let s = scene("chaplygin_sleigh");
+    assert!(s.model.nu() < s.model.nq());
+    let grid = Grid::new(vec![
+        ParamSpec::parse("e=0.2,0.6").unwrap(),
+        ParamSpec::parse("t_end=4").unwrap(),
+    ])
+    .unwrap();
+    let sweep = Sweep::new(&s, grid).unwrap();
+    let rows = sweep.run(Shard::ALL, None, &|_| {}).unwrap();
+    let mut bytes = Vec::new();
+    sweep.write_table(&mut bytes, Shard::ALL, &rows).unwrap();
+    let table = read_table(Cursor::new(&bytes), "mem").unwrap();
+    let speeds: Vec<String> = s
+        .model
+        .speeds()
+        .iter()
+        .map(|v| format!("u.{}", v.name))
+        .collect();
+    let u_columns: Vec<String> = (table.columns.iter())
+        .filter(|c| c.starts_with("u."))
+        .map(str::to_owned)
+        .collect();
+    assert_eq!(u_columns, speeds);
+    let coordinates = table.columns.iter().filter(|c| c.starts_with("q.")).count();
+    assert_eq!(coordinates, s.model.nq());
+    // The run with e = 0.6 against a single run with the same override.
+    let mut single = Simulation::new(
+        &s.model,
+        &ricochet::settings::Settings {
+            t_end: 4.0,
+            ..s.settings.clone()
+        },
+        MaterialOverride {
+            e: Some(0.6),
+            ..MaterialOverride::default()
+        },
+    )
+    .unwrap();
+    let end = single.run(&s.initial, &mut NullObserver, None);
+    assert_eq!(rows[1].stop(), "t_end");
+    assert!(end.counters.impacts > 0, "the sleigh reaches the wall");
+    let row = &table.rows[1].1;
+    for (k, name) in speeds.iter().enumerate() {
+        let at = table.columns.iter().position(|c| c == name).unwrap();
+        assert_eq!(
+            row[at].parse::<f64>().unwrap().to_bits(),
+            end.state.u[k].to_bits(),
+            "{name}"
+        );
+    }
+}
+
 fn table_bytes(sweep: &Sweep, shard: Shard, threads: usize) -> Vec<u8> {
     let rows = sweep
         .run(shard, NonZeroUsize::new(threads), &|_| {})
