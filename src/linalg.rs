@@ -122,6 +122,22 @@ pub(crate) fn min_norm_2x2(a: [[Real; 2]; 2], b: [Real; 2], rel_tol: Real) -> Op
     Some(x)
 }
 
+/// The largest absolute value of `v` (zero if empty): nalgebra's `amax` of a matrix whose
+/// entries are `v` in storage order, the same comparisons in the same order (the first
+/// entry's `|·|`, then each next `|x|` taken unless the running value is `≥` it), so the
+/// same number to the bit, without its generic iterator.
+pub(crate) fn amax(v: &[Real]) -> Real {
+    let Some((first, rest)) = v.split_first() else {
+        return 0.0;
+    };
+    let mut m = first.abs();
+    for x in rest {
+        let a = x.abs();
+        m = if m >= a { m } else { a };
+    }
+    m
+}
+
 /// Gives `m` the shape `rows × cols`, keeping its buffer when the shape is already right
 /// (nalgebra's `resize_mut` copies into a new buffer every time); the entries are left as
 /// they are when it is, and zero otherwise.
@@ -355,6 +371,44 @@ impl MinNorm {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// `amax` of a slice is nalgebra's `amax` of the matrix with those entries, to the bit,
+    /// with NaN, infinities, signed zeros and subnormals among random entries (a NaN's
+    /// place decides nalgebra's result: first, it stays unless a later entry is not below
+    /// it; later, it is skipped), and empty.
+    #[test]
+    fn amax_is_nalgebra_s_to_the_bit() {
+        let mut rng = Lcg(7);
+        let special = [
+            Real::NAN,
+            -Real::NAN,
+            Real::INFINITY,
+            Real::NEG_INFINITY,
+            0.0,
+            -0.0,
+            5e-324,
+            -Real::MAX,
+        ];
+        assert_eq!(
+            amax(&[]).to_bits(),
+            DVector::<Real>::zeros(0).amax().to_bits()
+        );
+        for case in 0..20_000 {
+            let n = 1 + case % 7;
+            let v: Vec<Real> = (0..n)
+                .map(|_| {
+                    let r = rng.next();
+                    if r > 0.6 {
+                        special[((r - 0.6) * 20.0) as usize % special.len()]
+                    } else {
+                        r * 10f64.powi((case % 9) as i32 - 4)
+                    }
+                })
+                .collect();
+            let m = DMatrix::from_column_slice(1, n, &v);
+            assert_eq!(amax(&v).to_bits(), m.amax().to_bits(), "{v:?}");
+        }
+    }
 
     /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG); the unit tests of
     /// other modules use it too.

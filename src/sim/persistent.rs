@@ -545,9 +545,12 @@ impl Persistent {
             let vertex = self.closed_vertices[i];
             match (self.eval).point(model, data, at, (local, vertex), self.scales.length)? {
                 Some(p) => {
-                    for r in 0..model.nu() {
-                        self.jac[(2 * i, r)] = self.eval.j_n[r];
-                        self.jac[(2 * i + 1, r)] = self.eval.j_t[r];
+                    // Rows 2i, 2i + 1 of the column-major `J` (2k × nu).
+                    let jac = self.jac.as_mut_slice();
+                    let rows = self.eval.j_n.iter().zip(&self.eval.j_t);
+                    for (r, (&jn, &jt)) in rows.enumerate() {
+                        jac[2 * i + 2 * k * r] = jn;
+                        jac[2 * i + 1 + 2 * k * r] = jt;
                     }
                     self.ev.points.push(p);
                 }
@@ -560,25 +563,42 @@ impl Persistent {
         self.velocity_products(model, data, (t, q, u))?;
         // Y = F⁻¹ Jᵀ column by column, with the factor M = F Fᵀ; A = J M⁻¹ Jᵀ = Yᵀ Y, one
         // triangle of dot products mirrored; b = J u̇_free + c.
-        for col in 0..2 * k {
-            let mut y = self.y.column_mut(col);
-            for (x, j) in y.iter_mut().zip(self.jac.row(col).iter()) {
-                *x = *j;
+        // On the column-major storages: `J[(i, r)]` is `jac[i + 2k r]`, column `i` of `Y`
+        // is `y[nu i..nu (i + 1)]`.
+        let (n2, nu) = (2 * k, self.column.len());
+        let jac = self.jac.as_slice();
+        let ys = self.y.as_mut_slice();
+        for col in 0..n2 {
+            let y = &mut ys[nu * col..nu * (col + 1)];
+            for (r, x) in y.iter_mut().enumerate() {
+                *x = jac[col + n2 * r];
             }
             (data.mass_factor)
-                .solve_factor_in_place(y.as_mut_slice())
+                .solve_factor_in_place(y)
                 .map_err(|e| e.at(t))?;
         }
-        for i in 0..2 * k {
-            let yi = self.y.column(i);
+        let (ys, a) = (self.y.as_slice(), self.ev.a.as_mut_slice());
+        for i in 0..n2 {
+            let yi = &ys[nu * i..nu * (i + 1)];
             for j in 0..=i {
-                let v = dot(yi.as_slice(), self.y.column(j).as_slice());
-                self.ev.a[(i, j)] = v;
-                self.ev.a[(j, i)] = v;
+                let v = dot(yi, &ys[nu * j..nu * (j + 1)]);
+                a[i + n2 * j] = v;
+                a[j + n2 * i] = v;
             }
         }
-        self.b.copy_from(&self.c);
-        self.b.gemv(1.0, &self.jac, &data.udot, 1.0);
+        // b = c + J u̇_free in the order of nalgebra's `gemv` with `α = β = 1` (the same
+        // numbers): `b ← J[:, 0] u̇₀ + b`, then each next column likewise.
+        let (b, c, udot) = (
+            self.b.as_mut_slice(),
+            self.c.as_slice(),
+            data.udot.as_slice(),
+        );
+        b.copy_from_slice(c);
+        for (r, &ud) in udot.iter().enumerate() {
+            for (bi, &ji) in b.iter_mut().zip(&jac[n2 * r..n2 * (r + 1)]) {
+                *bi = ji * ud + *bi;
+            }
+        }
         Ok(())
     }
 
