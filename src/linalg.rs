@@ -482,6 +482,31 @@ pub(crate) mod tests {
         );
     }
 
+    /// The 2×2 path keeps the signs of zeros as the general path makes them (its sums
+    /// `0 + x` and an empty sum's `−0` reach the solution): every system with entries in
+    /// {±0, ±1, 2, −½, 3} that the 2×2 path solves, bit for bit against the general path.
+    #[test]
+    fn the_2x2_path_keeps_the_general_path_s_signed_zeros() {
+        let values = [0.0, -0.0, 1.0, -1.0, 2.0, -0.5, 3.0];
+        let (mut fast, mut general) = (MinNorm::new(), MinNorm::new());
+        let mut taken = 0;
+        for code in 0..7usize.pow(6) {
+            let e: Vec<Real> = (0..6).map(|d| values[code / 7usize.pow(d) % 7]).collect();
+            let a = DMatrix::from_row_slice(2, 2, &e[..4]);
+            let b = DVector::from_column_slice(&e[4..]);
+            let (mut x1, mut x2) = (DVector::zeros(2), DVector::zeros(2));
+            if fast.solve_to_2x2(&a, &b, &mut x1, 0.0).is_none() {
+                continue;
+            }
+            taken += 1;
+            general.solve_general(&a, &b, &mut x2, 0.0);
+            for (u, v) in x1.iter().zip(x2.iter()) {
+                assert_eq!(u.to_bits(), v.to_bits(), "{a} {b}: {x1} vs {x2}");
+            }
+        }
+        assert!(taken > 50_000, "only {taken} systems on the 2x2 path");
+    }
+
     #[test]
     fn a_rank_deficient_system_of_known_svd_gets_its_minimum_norm_solution() {
         // A = U Σ Vᵀ with chosen singular values (some zero): the minimum-norm least-squares
