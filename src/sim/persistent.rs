@@ -403,6 +403,7 @@ impl Persistent {
     /// friction margin `μ λ_n − |λ_t|` of a sticking point (N; NaN for a sliding one, whose
     /// function there is its slip velocity), and the Painlevé coefficient capped at the
     /// scene's length (1/kg).
+    #[inline]
     pub fn force_functions(&self, i: usize) -> [Real; 3] {
         let (lambda_n, lambda_t) = self.force(i);
         let margin = match self.closed[i].hold {
@@ -726,8 +727,10 @@ impl Persistent {
     }
 
     /// The forces `(λ_n, λ_t)` of closed point `i` at the last evaluation (N).
+    #[inline]
     pub fn force(&self, i: usize) -> (Real, Real) {
-        (self.ev.lambda[2 * i], self.ev.lambda[2 * i + 1])
+        let lambda = self.ev.lambda.as_slice();
+        (lambda[2 * i], lambda[2 * i + 1])
     }
 
     /// The points of the last evaluation.
@@ -739,10 +742,13 @@ impl Persistent {
     /// acceleration per unit normal force with the friction of its slip,
     /// `A_nn − μ s A_nt` (`h` of [P, Eq. (35)] for `s = +1`, `q` for `s = −1`, in the frame
     /// of its slip). Non-positive: sliding cannot be held by a pushing force.
+    #[inline]
     pub fn painleve(&self, i: usize) -> Real {
         match self.closed[i].hold {
             Hold::Slide(s) => {
-                self.ev.a[(2 * i, 2 * i)] - self.mu[i] * s * self.ev.a[(2 * i, 2 * i + 1)]
+                // `A[(2i, 2i)]`, `A[(2i, 2i + 1)]` of the column-major storage.
+                let (a, n2) = (self.ev.a.as_slice(), self.ev.a.nrows());
+                a[2 * i + n2 * 2 * i] - self.mu[i] * s * a[2 * i + n2 * (2 * i + 1)]
             }
             Hold::Stick => Real::INFINITY,
         }
