@@ -595,9 +595,11 @@ impl Persistent {
             data.udot.as_slice(),
         );
         b.copy_from_slice(c);
+        let b = &mut b[..n2];
         for (r, &ud) in udot.iter().enumerate() {
-            for (bi, &ji) in b.iter_mut().zip(&jac[n2 * r..n2 * (r + 1)]) {
-                *bi = ji * ud + *bi;
+            let col = &jac[n2 * r..n2 * (r + 1)];
+            for i in 0..n2 {
+                b[i] = col[i] * ud + b[i];
             }
         }
         Ok(())
