@@ -599,7 +599,7 @@ impl Persistent {
         for (r, &ud) in udot.iter().enumerate() {
             let col = &jac[n2 * r..n2 * (r + 1)];
             for i in 0..n2 {
-                b[i] = col[i] * ud + b[i];
+                b[i] += col[i] * ud; // `J[(i, r)] u̇_r + b_i`: addition commutes
             }
         }
         Ok(())
