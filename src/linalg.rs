@@ -122,6 +122,22 @@ pub(crate) fn min_norm_2x2(a: [[Real; 2]; 2], b: [Real; 2], rel_tol: Real) -> Op
     Some(x)
 }
 
+/// The largest absolute value of `v` (zero if empty): nalgebra's `amax` of a matrix whose
+/// entries are `v` in storage order, the same comparisons in the same order (the first
+/// entry's `|·|`, then each next `|x|` taken unless the running value is `≥` it), so the
+/// same number to the bit, without its generic iterator.
+pub(crate) fn amax(v: &[Real]) -> Real {
+    let Some((first, rest)) = v.split_first() else {
+        return 0.0;
+    };
+    let mut m = first.abs();
+    for x in rest {
+        let a = x.abs();
+        m = if m >= a { m } else { a };
+    }
+    m
+}
+
 /// Gives `m` the shape `rows × cols`, keeping its buffer when the shape is already right
 /// (nalgebra's `resize_mut` copies into a new buffer every time); the entries are left as
 /// they are when it is, and zero otherwise.
@@ -356,6 +372,44 @@ impl MinNorm {
 pub(crate) mod tests {
     use super::*;
 
+    /// `amax` of a slice is nalgebra's `amax` of the matrix with those entries, to the bit,
+    /// with NaN, infinities, signed zeros and subnormals among random entries (a NaN's
+    /// place decides nalgebra's result: first, it stays unless a later entry is not below
+    /// it; later, it is skipped), and empty.
+    #[test]
+    fn amax_is_nalgebra_s_to_the_bit() {
+        let mut rng = Lcg(7);
+        let special = [
+            Real::NAN,
+            -Real::NAN,
+            Real::INFINITY,
+            Real::NEG_INFINITY,
+            0.0,
+            -0.0,
+            5e-324,
+            -Real::MAX,
+        ];
+        assert_eq!(
+            amax(&[]).to_bits(),
+            DVector::<Real>::zeros(0).amax().to_bits()
+        );
+        for case in 0..20_000 {
+            let n = 1 + case % 7;
+            let v: Vec<Real> = (0..n)
+                .map(|_| {
+                    let r = rng.next();
+                    if r > 0.6 {
+                        special[((r - 0.6) * 20.0) as usize % special.len()]
+                    } else {
+                        r * 10f64.powi((case % 9) as i32 - 4)
+                    }
+                })
+                .collect();
+            let m = DMatrix::from_column_slice(1, n, &v);
+            assert_eq!(amax(&v).to_bits(), m.amax().to_bits(), "{v:?}");
+        }
+    }
+
     /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG); the unit tests of
     /// other modules use it too.
     pub(crate) struct Lcg(pub(crate) u64);
@@ -426,6 +480,31 @@ pub(crate) mod tests {
             solved_fast > 10_000,
             "only {solved_fast} systems on the 2x2 path"
         );
+    }
+
+    /// The 2×2 path keeps the signs of zeros as the general path makes them (its sums
+    /// `0 + x` and an empty sum's `−0` reach the solution): every system with entries in
+    /// {±0, ±1, 2, −½, 3} that the 2×2 path solves, bit for bit against the general path.
+    #[test]
+    fn the_2x2_path_keeps_the_general_path_s_signed_zeros() {
+        let values = [0.0, -0.0, 1.0, -1.0, 2.0, -0.5, 3.0];
+        let (mut fast, mut general) = (MinNorm::new(), MinNorm::new());
+        let mut taken = 0;
+        for code in 0..7usize.pow(6) {
+            let e: Vec<Real> = (0..6).map(|d| values[code / 7usize.pow(d) % 7]).collect();
+            let a = DMatrix::from_row_slice(2, 2, &e[..4]);
+            let b = DVector::from_column_slice(&e[4..]);
+            let (mut x1, mut x2) = (DVector::zeros(2), DVector::zeros(2));
+            if fast.solve_to_2x2(&a, &b, &mut x1, 0.0).is_none() {
+                continue;
+            }
+            taken += 1;
+            general.solve_general(&a, &b, &mut x2, 0.0);
+            for (u, v) in x1.iter().zip(x2.iter()) {
+                assert_eq!(u.to_bits(), v.to_bits(), "{a} {b}: {x1} vs {x2}");
+            }
+        }
+        assert!(taken > 50_000, "only {taken} systems on the 2x2 path");
     }
 
     #[test]

@@ -163,17 +163,23 @@ pub fn frame_of(
     } else {
         -perp(n)
     };
-    for r in 0..model.nu() {
+    // The 2 × nu Jacobians column by column (column-major storage: column r is
+    // entries 2r, 2r + 1).
+    let nu = model.nu();
+    let (ja, jb) = (
+        &ws.jac_a.as_slice()[..2 * nu],
+        &ws.jac_b.as_slice()[..2 * nu],
+    );
+    let rows = j_n[..nu].iter_mut().zip(&mut j_t[..nu]);
+    for (r, (jn, jt)) in rows.enumerate() {
+        let (a0, a1) = (ja[2 * r], ja[2 * r + 1]);
         let col = if on_world {
-            Vec2::new(ws.jac_a[(0, r)], ws.jac_a[(1, r)])
+            Vec2::new(a0, a1)
         } else {
-            Vec2::new(
-                ws.jac_a[(0, r)] - ws.jac_b[(0, r)],
-                ws.jac_a[(1, r)] - ws.jac_b[(1, r)],
-            )
+            Vec2::new(a0 - jb[2 * r], a1 - jb[2 * r + 1])
         };
-        j_n[r] = n.dot(col);
-        j_t[r] = t.dot(col);
+        *jn = n.dot(col);
+        *jt = t.dot(col);
     }
     Ok(ContactFrame {
         pair,

@@ -6,7 +6,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{Allowed, Mode, Solution, Solutions, TOL};
-use crate::linalg::{MinNorm, fit_matrix, fit_vector, min_norm_2x2};
+use crate::linalg::{MinNorm, amax, fit_matrix, fit_vector, min_norm_2x2};
 use crate::math::Real;
 
 /// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
@@ -242,12 +242,16 @@ impl ModeSystem {
         modes: &[Mode],
         reference: &[Real],
     ) -> Option<(&DVector<Real>, &DVector<Real>)> {
-        let scales = (a.amax().max(Real::MIN_POSITIVE), b.amax());
         if let [mode] = modes
-            && let Some(solved) = self.solve_one(a, b, mu[0], *mode, scales, reference)
+            && let Some(solved) = self.solve_one(a, b, mu[0], *mode, reference)
         {
             return solved.then_some((&self.x, &self.w));
         }
+        // nalgebra's `amax` to the bit (`linalg::amax`), on the storage.
+        let scales = (
+            amax(a.as_slice()).max(Real::MIN_POSITIVE),
+            amax(b.as_slice()),
+        );
         self.solve(a, b, |i| mu[i], modes, scales, Some(reference))?;
         Some((&self.x, &self.w))
     }
@@ -266,19 +270,21 @@ impl ModeSystem {
         b: &DVector<Real>,
         mu: Real,
         mode: Mode,
-        (scale_a, scale_b): (Real, Real),
         reference: &[Real],
     ) -> Option<bool> {
         if a.shape() != (2, 2) || b.len() != 2 || reference.len() != 2 {
             return None;
         }
-        let (a, b) = (
-            [[a[(0, 0)], a[(0, 1)]], [a[(1, 0)], a[(1, 1)]]],
-            [b[0], b[1]],
-        );
-        if !(a.iter().flatten().chain(&b).chain(reference)).all(|v| v.is_finite()) {
+        // Column-major storage: `a[(i, j)]` is `s[i + 2 j]`.
+        let (s, b, r) = (a.as_slice(), b.as_slice(), reference);
+        let (a, b) = ([[s[0], s[2]], [s[1], s[3]]], [b[0], b[1]]);
+        let finite = [s[0], s[1], s[2], s[3], b[0], b[1], r[0], r[1]];
+        if !finite.iter().fold(true, |all, v| all & v.is_finite()) {
             return None;
         }
+        // The scales of `forces_near` (nalgebra's `amax` of `A` and `b`, `linalg::amax`).
+        let scale_a = amax(&[s[0], s[1], s[2], s[3]]).max(Real::MIN_POSITIVE);
+        let scale_b = amax(&b);
         // The rows of the mode, `lhs[i][j]` (row i), and the right-hand side.
         let (lhs, rhs) = match mode {
             Mode::Open => ([[1.0, 0.0], [0.0, 1.0]], [0.0, 0.0]),
@@ -476,7 +482,7 @@ mod tests {
                 },
             };
             let scales = (a.amax().max(Real::MIN_POSITIVE), b.amax());
-            let Some(ok) = fast.solve_one(&a, &b, mu, mode, scales, &reference) else {
+            let Some(ok) = fast.solve_one(&a, &b, mu, mode, &reference) else {
                 continue;
             };
             taken += 1;

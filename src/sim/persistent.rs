@@ -403,6 +403,7 @@ impl Persistent {
     /// friction margin `μ λ_n − |λ_t|` of a sticking point (N; NaN for a sliding one, whose
     /// function there is its slip velocity), and the Painlevé coefficient capped at the
     /// scene's length (1/kg).
+    #[inline]
     pub fn force_functions(&self, i: usize) -> [Real; 3] {
         let (lambda_n, lambda_t) = self.force(i);
         let margin = match self.closed[i].hold {
@@ -545,9 +546,12 @@ impl Persistent {
             let vertex = self.closed_vertices[i];
             match (self.eval).point(model, data, at, (local, vertex), self.scales.length)? {
                 Some(p) => {
-                    for r in 0..model.nu() {
-                        self.jac[(2 * i, r)] = self.eval.j_n[r];
-                        self.jac[(2 * i + 1, r)] = self.eval.j_t[r];
+                    // Rows 2i, 2i + 1 of the column-major `J` (2k × nu).
+                    let jac = self.jac.as_mut_slice();
+                    let rows = self.eval.j_n.iter().zip(&self.eval.j_t);
+                    for (r, (&jn, &jt)) in rows.enumerate() {
+                        jac[2 * i + 2 * k * r] = jn;
+                        jac[2 * i + 1 + 2 * k * r] = jt;
                     }
                     self.ev.points.push(p);
                 }
@@ -560,25 +564,44 @@ impl Persistent {
         self.velocity_products(model, data, (t, q, u))?;
         // Y = F⁻¹ Jᵀ column by column, with the factor M = F Fᵀ; A = J M⁻¹ Jᵀ = Yᵀ Y, one
         // triangle of dot products mirrored; b = J u̇_free + c.
-        for col in 0..2 * k {
-            let mut y = self.y.column_mut(col);
-            for (x, j) in y.iter_mut().zip(self.jac.row(col).iter()) {
-                *x = *j;
+        // On the column-major storages: `J[(i, r)]` is `jac[i + 2k r]`, column `i` of `Y`
+        // is `y[nu i..nu (i + 1)]`.
+        let (n2, nu) = (2 * k, self.column.len());
+        let jac = self.jac.as_slice();
+        let ys = self.y.as_mut_slice();
+        for col in 0..n2 {
+            let y = &mut ys[nu * col..nu * (col + 1)];
+            for (r, x) in y.iter_mut().enumerate() {
+                *x = jac[col + n2 * r];
             }
             (data.mass_factor)
-                .solve_factor_in_place(y.as_mut_slice())
+                .solve_factor_in_place(y)
                 .map_err(|e| e.at(t))?;
         }
-        for i in 0..2 * k {
-            let yi = self.y.column(i);
+        let (ys, a) = (self.y.as_slice(), self.ev.a.as_mut_slice());
+        for i in 0..n2 {
+            let yi = &ys[nu * i..nu * (i + 1)];
             for j in 0..=i {
-                let v = dot(yi.as_slice(), self.y.column(j).as_slice());
-                self.ev.a[(i, j)] = v;
-                self.ev.a[(j, i)] = v;
+                let v = dot(yi, &ys[nu * j..nu * (j + 1)]);
+                a[i + n2 * j] = v;
+                a[j + n2 * i] = v;
             }
         }
-        self.b.copy_from(&self.c);
-        self.b.gemv(1.0, &self.jac, &data.udot, 1.0);
+        // b = c + J u̇_free in the order of nalgebra's `gemv` with `α = β = 1` (the same
+        // numbers): `b ← J[:, 0] u̇₀ + b`, then each next column likewise.
+        let (b, c, udot) = (
+            self.b.as_mut_slice(),
+            self.c.as_slice(),
+            data.udot.as_slice(),
+        );
+        b.copy_from_slice(c);
+        let b = &mut b[..n2];
+        for (r, &ud) in udot.iter().enumerate() {
+            let col = &jac[n2 * r..n2 * (r + 1)];
+            for i in 0..n2 {
+                b[i] += col[i] * ud; // `J[(i, r)] u̇_r + b_i`: addition commutes
+            }
+        }
         Ok(())
     }
 
@@ -706,8 +729,10 @@ impl Persistent {
     }
 
     /// The forces `(λ_n, λ_t)` of closed point `i` at the last evaluation (N).
+    #[inline]
     pub fn force(&self, i: usize) -> (Real, Real) {
-        (self.ev.lambda[2 * i], self.ev.lambda[2 * i + 1])
+        let lambda = self.ev.lambda.as_slice();
+        (lambda[2 * i], lambda[2 * i + 1])
     }
 
     /// The points of the last evaluation.
@@ -719,10 +744,13 @@ impl Persistent {
     /// acceleration per unit normal force with the friction of its slip,
     /// `A_nn − μ s A_nt` (`h` of [P, Eq. (35)] for `s = +1`, `q` for `s = −1`, in the frame
     /// of its slip). Non-positive: sliding cannot be held by a pushing force.
+    #[inline]
     pub fn painleve(&self, i: usize) -> Real {
         match self.closed[i].hold {
             Hold::Slide(s) => {
-                self.ev.a[(2 * i, 2 * i)] - self.mu[i] * s * self.ev.a[(2 * i, 2 * i + 1)]
+                // `A[(2i, 2i)]`, `A[(2i, 2i + 1)]` of the column-major storage.
+                let (a, n2) = (self.ev.a.as_slice(), self.ev.a.nrows());
+                a[2 * i + n2 * 2 * i] - self.mu[i] * s * a[2 * i + n2 * (2 * i + 1)]
             }
             Hold::Stick => Real::INFINITY,
         }
