@@ -223,4 +223,62 @@ impl Data {
             constraint_scratch: DVector::zeros(m),
         }
     }
+
+    /// Copies the kinematics of `other`, scratch of the same model: every field that
+    /// [`crate::kinematics::update_positions`] and [`crate::kinematics::update_velocities`]
+    /// write (the time, the joint coordinates and rates, the joint frames, motion subspaces,
+    /// body poses, centres of mass, inertias, twists and velocity-product accelerations,
+    /// and for a nonholonomic model the constraint rows, their factors, the speed map and
+    /// the tree speeds). Afterwards `self` holds, bit for bit, what those two calls at
+    /// `other`'s state would have written: a consumer of the kinematics of a state that
+    /// another scratch evaluated (the right-hand side's last stage is the step's end) copies
+    /// them instead of computing them again — the tree pass and one `sincos` per revolute
+    /// joint. Allocates nothing when both come from the same model.
+    pub fn copy_kinematics_from(&mut self, other: &Data) {
+        fn vec<T: Copy>(dst: &mut Vec<T>, src: &[T]) {
+            if dst.len() == src.len() {
+                dst.copy_from_slice(src);
+            } else {
+                dst.clear();
+                dst.extend_from_slice(src);
+            }
+        }
+        fn mat(dst: &mut DMatrix<Real>, src: &DMatrix<Real>) {
+            if dst.shape() == src.shape() {
+                dst.copy_from(src);
+            } else {
+                *dst = src.clone();
+            }
+        }
+        fn col(dst: &mut DVector<Real>, src: &DVector<Real>) {
+            if dst.len() == src.len() {
+                dst.copy_from(src);
+            } else {
+                *dst = src.clone();
+            }
+        }
+        self.time = other.time;
+        vec(&mut self.joint_q, &other.joint_q);
+        vec(&mut self.joint_qd, &other.joint_qd);
+        vec(&mut self.joint_qdd_prescribed, &other.joint_qdd_prescribed);
+        vec(&mut self.joint_frame, &other.joint_frame);
+        vec(&mut self.subspace, &other.subspace);
+        vec(&mut self.body_pose, &other.body_pose);
+        vec(&mut self.body_com, &other.body_com);
+        vec(&mut self.body_inertia, &other.body_inertia);
+        vec(&mut self.body_twist, &other.body_twist);
+        vec(&mut self.body_twist_remainder, &other.body_twist_remainder);
+        vec(&mut self.body_accel_vp, &other.body_accel_vp);
+        if other.constraint_pivots.is_empty() && self.constraint_pivots.is_empty() {
+            // Holonomic: no constraint fields (all empty).
+            return;
+        }
+        vec(&mut self.constraint_frame, &other.constraint_frame);
+        mat(&mut self.constraint_rows, &other.constraint_rows);
+        mat(&mut self.constraint_lu, &other.constraint_lu);
+        vec(&mut self.constraint_pivots, &other.constraint_pivots);
+        mat(&mut self.speed_map, &other.speed_map);
+        col(&mut self.tree_speed, &other.tree_speed);
+        col(&mut self.constraint_scratch, &other.constraint_scratch);
+    }
 }

@@ -69,6 +69,21 @@ pub struct GapFunctions<'m> {
     end: Evaluation,
     /// What `self.data` holds, with the gaps' contacts found there (see [`Here`]).
     here: Here,
+    /// The kinematics of the step's end from the right-hand side (see
+    /// [`Self::take_end_kinematics`]).
+    end_kinematics: EndKinematics,
+}
+
+/// The kinematics of the step's end, copied from the right-hand side's scratch, whose last
+/// stage (DOPRI5's, first same as last) evaluated that very state: the exact samples there
+/// (the values and rates at the step's end) copy them instead of computing them again.
+struct EndKinematics {
+    /// Whether `data` holds the positions and velocities at `(t, qu)`.
+    valid: bool,
+    t: Real,
+    /// `[q; u]`.
+    qu: Vec<Real>,
+    data: Data,
 }
 
 /// The state whose kinematics `GapFunctions::data` holds after the values of a sample, with
@@ -295,7 +310,56 @@ impl<'m> GapFunctions<'m> {
             stand_ins: StandIns::default(),
             end: Evaluation::default(),
             here: Here::default(),
+            end_kinematics: EndKinematics {
+                valid: false,
+                t: Real::NAN,
+                qu: vec![0.0; model.nq() + model.nu()],
+                data: Data::for_kinematics(model),
+            },
         }
+    }
+
+    /// Takes the kinematics of the right-hand side's last evaluation if it was at the
+    /// step's end `(t, y)` (the last stage of a DOPRI5 step): the values and rates there
+    /// copy them ([`Data::copy_kinematics_from`], the same numbers) instead of one
+    /// positions and one velocities pass each. Call before the location of a step; what
+    /// was taken is used only at that very state. Not when the stand-ins are off (the
+    /// oracle computes everything).
+    pub fn take_end_kinematics(&mut self, system: &super::MotionSystem<'_>, t: Real, y: &[Real]) {
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
+        let end = &mut self.end_kinematics;
+        end.valid = false;
+        if self.stand_ins.off {
+            return;
+        }
+        if let Some(data) = system.kinematics_at(t, &y[..n], &y[n..nqu]) {
+            end.data.copy_kinematics_from(data);
+            end.t = t;
+            end.qu.copy_from_slice(&y[..nqu]);
+            end.valid = true;
+        }
+    }
+
+    /// Whether the kinematics of the right-hand side may be shared with other consumers of
+    /// the same state (not when the stand-ins are off: the oracle computes everything).
+    pub fn shares_kinematics(&self) -> bool {
+        !self.stand_ins.off
+    }
+
+    /// Copies the kinematics taken by [`Self::take_end_kinematics`] into `self.data` if they
+    /// are those of `(t, q, u)`; whether it did.
+    fn end_kinematics_at(&mut self, t: Real, q: &[Real], u: &[Real]) -> bool {
+        let end = &self.end_kinematics;
+        let n = q.len();
+        let at = end.valid
+            && end.t == t
+            && end.qu.len() == n + u.len()
+            && end.qu[..n] == *q
+            && end.qu[n..] == *u;
+        if at {
+            self.data.copy_kinematics_from(&end.data);
+        }
+        at
     }
 
     /// Takes the last evaluation of the ODE system's closed points (the same closed
@@ -537,8 +601,14 @@ impl GapFunctions<'_> {
         // Positions alone, or the forward dynamics (positions and velocities).
         let positions_only = self.persistent.closed().is_empty() || taken;
         self.here.valid = false;
+        // The velocities too, if the right-hand side's kinematics of this state are copied.
+        let mut velocities = !positions_only;
         if positions_only {
-            update_positions(model, &mut self.data, t, q).map_err(|e| Nested::from(e.at(t)))?;
+            if self.end_kinematics_at(t, q, u) {
+                velocities = true;
+            } else {
+                update_positions(model, &mut self.data, t, q).map_err(|e| Nested::from(e.at(t)))?;
+            }
             if taken {
                 // The right-hand side's evaluation of this very state (see
                 // `take_end_evaluation`).
@@ -552,7 +622,7 @@ impl GapFunctions<'_> {
                 .accelerate(model, &mut self.data, (t, q, u))?;
         }
         self.gap_slots(t, g)?;
-        self.keep_here(t, y, !positions_only);
+        self.keep_here(t, y, velocities);
         for i in 0..self.persistent.closed().len() {
             let c = self.persistent.closed()[i];
             let j = rank(&self.persistent, i);
@@ -839,10 +909,12 @@ impl EventFunctions for GapFunctions<'_> {
             self.values(t, y, g)?;
             return Ok(g[i]);
         }
-        let n = self.model.nq();
+        let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         self.here.valid = false;
-        update_positions(self.model, &mut self.data, t, &y[..n])
-            .map_err(|e| Nested::from(e.at(t)))?;
+        if !self.end_kinematics_at(t, &y[..n], &y[n..nqu]) {
+            update_positions(self.model, &mut self.data, t, &y[..n])
+                .map_err(|e| Nested::from(e.at(t)))?;
+        }
         let pair = self.candidates[i / SLOTS];
         let floor = match self.disarmed.binary_search_by_key(&pair, |d| d.0) {
             Ok(k) => self.disarmed[k].1,
@@ -866,8 +938,12 @@ impl EventFunctions for GapFunctions<'_> {
         let model = self.model;
         let (n, nqu) = (model.nq(), model.nq() + model.nu());
         self.here.valid = false;
-        update_positions(model, &mut self.data, t, &y[..n]).map_err(|e| Nested::from(e.at(t)))?;
-        update_velocities(model, &mut self.data, &y[n..nqu]).map_err(|e| Nested::from(e.at(t)))?;
+        if !self.end_kinematics_at(t, &y[..n], &y[n..nqu]) {
+            update_positions(model, &mut self.data, t, &y[..n])
+                .map_err(|e| Nested::from(e.at(t)))?;
+            update_velocities(model, &mut self.data, &y[n..nqu])
+                .map_err(|e| Nested::from(e.at(t)))?;
+        }
         let contact = self.gap_contact(self.candidates[i / SLOTS], t)?;
         self.gap_rate(self.candidates[i / SLOTS], contact, t)
             .map(Some)
@@ -918,12 +994,17 @@ impl EventFunctions for GapFunctions<'_> {
         let (n, nqu) = (model.nq(), model.nq() + model.nu());
         // The kinematics and contacts of the values at this sample, if `data` holds them.
         let here = self.here.holds(self, t, &y[..n]);
+        let mut velocities = here && self.here.velocities && self.here.qu[n..] == y[n..nqu];
         if !here {
             self.here.valid = false;
-            update_positions(model, &mut self.data, t, &y[..n])
-                .map_err(|e| Nested::from(e.at(t)))?;
+            if self.end_kinematics_at(t, &y[..n], &y[n..nqu]) {
+                velocities = true;
+            } else {
+                update_positions(model, &mut self.data, t, &y[..n])
+                    .map_err(|e| Nested::from(e.at(t)))?;
+            }
         }
-        if !(here && self.here.velocities && self.here.qu[n..] == y[n..nqu]) {
+        if !velocities {
             update_velocities(model, &mut self.data, &y[n..nqu])
                 .map_err(|e| Nested::from(e.at(t)))?;
             if here {

@@ -454,8 +454,19 @@ impl<'m> Simulation<'m> {
         let t = self.stepper.t();
         {
             let y = self.stepper.y();
-            update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
-            update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
+            // The right-hand side's kinematics if its last evaluation was this state (the
+            // last stage of the step that ended here), else computed: the same numbers.
+            let shared = (self.system.kinematics_at(t, &y[..n], &y[n..nqu]))
+                .filter(|_| self.gaps.shares_kinematics());
+            match shared {
+                Some(data) => self.sampler.copy_kinematics_from(data),
+                None => {
+                    update_positions(self.model, &mut self.sampler, t, &y[..n])
+                        .map_err(|e| e.at(t))?;
+                    update_velocities(self.model, &mut self.sampler, &y[n..nqu])
+                        .map_err(|e| e.at(t))?;
+                }
+            }
         }
         if self.every_pair_forced() {
             self.arm();
@@ -503,13 +514,22 @@ impl<'m> Simulation<'m> {
             } else {
                 self.stepper.dense(t, &mut y);
             }
-            result = update_positions(self.model, &mut self.sampler, t, &y[..n])
-                .and_then(|()| update_velocities(self.model, &mut self.sampler, &y[n..nqu]))
-                .and_then(|()| {
-                    let regions = (&mut self.boxes[..], &mut self.planes[..]);
-                    broad::sweep_boxes(self.model, &self.sampler, regions, |v| v * dt)
-                })
-                .map_err(|e| e.at(t));
+            let shared = (self.system.kinematics_at(t, &y[..n], &y[n..nqu]))
+                .filter(|_| self.gaps.shares_kinematics());
+            result = match shared {
+                // The step's end: the right-hand side's last stage evaluated it.
+                Some(data) => {
+                    self.sampler.copy_kinematics_from(data);
+                    Ok(())
+                }
+                None => update_positions(self.model, &mut self.sampler, t, &y[..n])
+                    .and_then(|()| update_velocities(self.model, &mut self.sampler, &y[n..nqu])),
+            }
+            .and_then(|()| {
+                let regions = (&mut self.boxes[..], &mut self.planes[..]);
+                broad::sweep_boxes(self.model, &self.sampler, regions, |v| v * dt)
+            })
+            .map_err(|e| e.at(t));
             if result.is_err() {
                 break;
             }
@@ -656,6 +676,7 @@ impl<'m> Simulation<'m> {
     /// the modes again there.
     fn locate(&mut self) -> Result<Option<Option<Event>>, SimError> {
         self.gaps.take_end_evaluation(&mut self.system.persistent);
+        (self.gaps).take_end_kinematics(&self.system, self.stepper.t(), self.stepper.y());
         let located = self.locate_events();
         self.gaps.drop_end_evaluation();
         located

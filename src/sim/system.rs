@@ -20,10 +20,20 @@ use crate::state::Data;
 /// the contact forces, for the energy audit.
 pub struct MotionSystem<'m> {
     model: &'m Model,
-    /// Scratch of the right-hand side.
-    pub data: Data,
+    /// Scratch of the right-hand side (written by it alone: see [`Self::kinematics_at`]).
+    data: Data,
     /// The closed contact points and their forces.
     pub persistent: Persistent,
+    /// The state `(t, [q; u])` whose kinematics `data` holds (see [`Self::kinematics_at`]).
+    kinematics: KinematicsAt,
+}
+
+/// The state of the last right-hand side whose kinematics completed.
+struct KinematicsAt {
+    /// Whether `t` and `qu` describe `data`.
+    valid: bool,
+    t: Real,
+    qu: Vec<Real>,
 }
 
 /// Number of work quadratures: dampers, applied efforts, drives, contact forces.
@@ -36,7 +46,24 @@ impl<'m> MotionSystem<'m> {
             model,
             data: Data::new(model),
             persistent: Persistent::new(model, scales),
+            kinematics: KinematicsAt {
+                valid: false,
+                t: Real::NAN,
+                qu: vec![0.0; model.nq() + model.nu()],
+            },
         }
+    }
+
+    /// The scratch of the right-hand side if it holds the kinematics of `(t, q, u)` (the
+    /// positions and velocities of its last evaluation, there): e.g. the end state of a
+    /// DOPRI5 step, whose last stage (FSAL) is evaluated there. A consumer of the
+    /// kinematics of that state copies them ([`Data::copy_kinematics_from`]): the same
+    /// numbers as `update_positions` and `update_velocities` there.
+    pub fn kinematics_at(&self, t: Real, q: &[Real], u: &[Real]) -> Option<&Data> {
+        let k = &self.kinematics;
+        let n = q.len();
+        (k.valid && k.t == t && k.qu.len() == n + u.len() && k.qu[..n] == *q && k.qu[n..] == *u)
+            .then_some(&self.data)
     }
 }
 
@@ -55,7 +82,12 @@ impl OdeSystem for MotionSystem<'_> {
     fn rhs(&mut self, t: Real, y: &[Real], dy: &mut [Real]) -> Result<(), Nested> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let (q, u) = (&y[..n], &y[n..nqu]);
+        self.kinematics.valid = false;
         forward_dynamics(self.model, &mut self.data, t, q, u).map_err(|e| Nested::from(e.at(t)))?;
+        // `accelerate` and `power` leave the kinematics as they are.
+        self.kinematics.t = t;
+        self.kinematics.qu.copy_from_slice(&y[..nqu]);
+        self.kinematics.valid = true;
         self.persistent
             .accelerate(self.model, &mut self.data, (t, q, u))?;
         coordinate_rates(self.model, &self.data, u, &mut dy[..n]);

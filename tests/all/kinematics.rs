@@ -201,3 +201,94 @@ fn kinematics_reports_wrong_sizes_and_unknown_bodies() {
         .is_err()
     );
 }
+
+/// `Data::copy_kinematics_from` gives, bit for bit, what `update_positions` and
+/// `update_velocities` write at the source's state (the sharing of the right-hand side's
+/// kinematics with the event functions and the broad phase rests on it): every bundled
+/// scene (revolute chains, free bodies, prescribed drives, the nonholonomic blades of the
+/// sleigh and the wagon), at its initial state and at perturbed states and times, the
+/// source evaluated by the forward dynamics as the right-hand side does, the destination
+/// holding another state's kinematics before the copy.
+#[test]
+fn copied_kinematics_are_the_computed_ones_bit_for_bit() {
+    use ricochet::dynamics::forward_dynamics;
+    use ricochet::kinematics::update_velocities;
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes");
+    let mut rng = Rng::new(0x5eed_c0de);
+    let mut scenes = 0;
+    let mut paths: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    paths.sort();
+    for path in paths {
+        let scene = ricochet::scene::load(&path).unwrap();
+        let model = &scene.model;
+        let (q0, u0) = (scene.initial.q.as_slice(), scene.initial.u.as_slice());
+        let mut source = Data::new(model);
+        let mut copy = Data::for_kinematics(model);
+        let mut computed = Data::new(model);
+        for k in 0..6 {
+            let perturb = |x: &[Real], rng: &mut Rng, scale: Real| -> Vec<Real> {
+                x.iter()
+                    .map(|&v| v + scale * rng.uniform(-1.0, 1.0))
+                    .collect()
+            };
+            let scale = if k == 0 { 0.0 } else { 0.05 };
+            let (q, u) = (perturb(q0, &mut rng, scale), perturb(u0, &mut rng, scale));
+            let t = 0.37 * k as Real;
+            // The copy's former content: another state's kinematics.
+            let (qa, ua) = (perturb(q0, &mut rng, 0.1), perturb(u0, &mut rng, 0.1));
+            update_positions(model, &mut copy, t + 1.0, &qa).unwrap();
+            update_velocities(model, &mut copy, &ua).unwrap();
+            forward_dynamics(model, &mut source, t, &q, &u).unwrap();
+            copy.copy_kinematics_from(&source);
+            update_positions(model, &mut computed, t, &q).unwrap();
+            update_velocities(model, &mut computed, &u).unwrap();
+            let bits = |d: &Data| {
+                format!(
+                    "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+                    d.time.to_bits(),
+                    d.joint_q,
+                    d.joint_qd,
+                    d.joint_qdd_prescribed,
+                    d.joint_frame,
+                    d.subspace,
+                    d.body_pose,
+                    d.body_com,
+                    d.body_inertia,
+                    d.body_twist,
+                    d.body_twist_remainder,
+                    d.body_accel_vp,
+                    d.constraint_frame,
+                    d.constraint_rows,
+                    d.constraint_lu,
+                    d.constraint_pivots,
+                    d.speed_map,
+                    d.tree_speed,
+                )
+            };
+            assert_eq!(
+                bits(&copy),
+                bits(&computed),
+                "{}: state {k}",
+                path.display()
+            );
+            // And what is read from them: the world velocity of a body point.
+            for body in model.body_ids() {
+                let p = Vec2::new(0.3, -0.2);
+                let (vc, vd) = (
+                    ricochet::kinematics::point_velocity(model, &copy, body, p).unwrap(),
+                    ricochet::kinematics::point_velocity(model, &computed, body, p).unwrap(),
+                );
+                assert_eq!(
+                    (vc.total.x.to_bits(), vc.total.y.to_bits()),
+                    (vd.total.x.to_bits(), vd.total.y.to_bits())
+                );
+            }
+        }
+        scenes += 1;
+    }
+    assert!(scenes >= 14, "only {scenes} scenes");
+}
