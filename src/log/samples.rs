@@ -17,7 +17,9 @@
 //! and whenever a sample's layout differs from the last one sent (a pair starts or stops
 //! being listed): a run in its steady state copies numbers only and allocates nothing.
 //!
-//! Only frame transforms whose timestamp, translation and rotation are all present, with a
+//! Samples go this way while the sink thread keeps up
+//! ([`Sink::defers_samples`](super::sink::Sink::defers_samples)); otherwise the calling
+//! thread encodes them. Only frame transforms whose timestamp, translation and rotation are all present, with a
 //! normalized timestamp (what [`RunLogger`](super::RunLogger) writes), go this way; others
 //! are encoded on the calling thread as before.
 
@@ -336,9 +338,10 @@ mod tests {
     }
 
     /// Through a whole log: samples whose layouts change (pairs listed and unlisted,
-    /// frames added), interleaved with transforms that are not plain (encoded on the
-    /// calling thread), in small batches and chunks: every `/state` and `/tf` message
-    /// holds the bytes of the sample's own encoding.
+    /// frames added), going as numbers or encoded on the calling thread in turns (and as
+    /// the writer thread's progress decides), interleaved with transforms that are not
+    /// plain (encoded on the calling thread), in small batches and chunks: every `/state`
+    /// and `/tf` message holds the bytes of the sample's own encoding.
     #[test]
     fn a_log_holds_each_samples_own_bytes() {
         let mut bits = Bits(crate::linalg::tests::Lcg(7));
@@ -351,6 +354,7 @@ mod tests {
         for k in 0..700 {
             // Layouts in runs of a few samples, coming back to earlier ones.
             let layout = ((k / 7) % 3, PAIRS[(k / 5) % 3]);
+            log.defer_samples([Some(true), Some(false), None][(k / 3) % 3]);
             let mut s = state(&mut bits, layout, true);
             s.t = k as f64 * 0.01;
             log.state(&s).unwrap();

@@ -20,6 +20,9 @@
 //! instructions of a sample), while this thread, which compresses, had time to spare on a
 //! second core. As numbers they cost the calling thread a copy of ~40 words and allocate
 //! nothing: 1.9M instructions fewer per run on the simulation thread, 0.5M more over both.
+//! They go as numbers only while this thread keeps up ([`Sink::defers_samples`]): where
+//! the simulation is cheaper per sample than writing it (the end of that run), or with no
+//! core to spare, the calling thread encodes them, as before.
 //!
 //! The schemas and channels are registered on the sink thread right before the first
 //! message, so that they share its chunk: a chunk that held only schemas and channels
@@ -42,7 +45,7 @@
 //! holding everything given so far.
 
 use std::io::{Seek, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
@@ -251,6 +254,13 @@ pub(super) struct Sink<W: Write + Seek + Send + 'static> {
     /// Batches coming back from the sink thread, for reuse.
     spare: Receiver<Batch>,
     failure: Arc<Failure>,
+    /// Batches sent to the sink thread.
+    sent: u64,
+    /// Batches the sink thread has written (it counts them).
+    written: Arc<AtomicU64>,
+    /// Tests: whether samples go as numbers whatever the sink thread's progress.
+    #[cfg(test)]
+    pub(super) defer: Option<bool>,
     thread: Option<JoinHandle<Option<Result<W, McapError>>>>,
 }
 
@@ -277,9 +287,11 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         let (recycle, spare) = sync_channel(QUEUE + 2);
         let failure = Arc::new(Failure::default());
         let shared = Arc::clone(&failure);
+        let written = Arc::new(AtomicU64::new(0));
+        let counter = Arc::clone(&written);
         let thread = std::thread::Builder::new()
             .name("ricochet-log".to_owned())
-            .spawn(move || serve(writing, &inbox, &recycle, &shared))
+            .spawn(move || serve(writing, &inbox, &recycle, (&shared, &counter)))
             .map_err(LogError::Thread)?;
         Ok(Sink {
             commands: Some(commands),
@@ -288,6 +300,10 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             tf_layout: None,
             spare,
             failure,
+            sent: 0,
+            written,
+            #[cfg(test)]
+            defer: None,
             thread: Some(thread),
         })
     }
@@ -311,6 +327,24 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             .messages
             .push((header, Payload::Bytes { start, end }));
         self.send_if_full()
+    }
+
+    /// Whether to hand the next sample to the sink thread as numbers, to be encoded there
+    /// (see `samples.rs`): unless that thread is behind, a whole batch waiting for it
+    /// besides the one it writes. Where the simulation is cheap (a pendulum sliding
+    /// steadily: ~1 µs of its thread per sample) and the sink thread slower than it
+    /// (writing and compressing a sample's two messages: ~2 µs), the calling thread
+    /// encodes the samples itself again, so that less remains to do when the run ends;
+    /// with no second core to spare, it thus does what it did before samples went as
+    /// numbers. The bytes are the same either way.
+    pub(super) fn defers_samples(&self) -> bool {
+        #[cfg(test)]
+        if let Some(defer) = self.defer {
+            return defer;
+        }
+        self.sent
+            .saturating_sub(self.written.load(Ordering::Acquire))
+            < 2
     }
 
     /// Adds the `/state` sample `state` (its numbers, and its layout if it is new; encoded
@@ -428,6 +462,7 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         let mut next = (self.spare.try_recv()).unwrap_or_else(|_| self.open.empty_like());
         next.clear();
         let full = std::mem::replace(&mut self.open, next);
+        self.sent += 1;
         self.send(Command::Messages(full))
     }
 
@@ -591,7 +626,7 @@ fn serve<W: Write + Seek>(
     mut writing: Writing<W>,
     inbox: &Receiver<Command>,
     recycle: &SyncSender<Batch>,
-    failure: &Failure,
+    (failure, done): (&Failure, &AtomicU64),
 ) -> Option<Result<W, McapError>> {
     let mut broken = false;
     for command in inbox {
@@ -602,6 +637,7 @@ fn serve<W: Write + Seek>(
                 } else {
                     writing.messages(&batch)
                 };
+                done.fetch_add(1, Ordering::Release);
                 // The batch goes back for reuse; if the pool is full, it is dropped.
                 let _ = recycle.try_send(batch);
                 written
