@@ -39,6 +39,7 @@ mod reader;
 mod records;
 mod repair;
 mod run;
+mod samples;
 pub mod schemas;
 mod sink;
 mod writer;

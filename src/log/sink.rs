@@ -1,28 +1,35 @@
-//! [`Sink`]: the MCAP writer on a thread of its own, so that compressing the chunks and
-//! writing them out overlaps with the simulation.
+//! [`Sink`]: the MCAP writer on a thread of its own, so that encoding the samples,
+//! compressing the chunks and writing them out overlap with the simulation.
 //!
 //! The simulation thread checks each message (a bad number is reported at once, naming
-//! the field) and puts it in a [`Batch`]: the messages encoded (JSON or protobuf; the
-//! `/state` and `/tf` samples by their own encoders,
-//! [`StateRecord::append_json`](super::records::StateRecord::append_json) and
-//! [`append_frame_transforms`](super::foxglove::append_frame_transforms)), back to back in one buffer, and the impacts as copies of
-//! their records. A full batch goes to the sink thread, which encodes the three messages
-//! of an impact (its ledger entry on `/impacts`, its arrow on `/scene`, its line on
-//! `/log`) and writes every message to the `mcap::Writer`.
+//! the field) and puts it in a [`Batch`]: the `/state` and `/tf` samples as their numbers
+//! (`samples.rs`: the bits of each `f64`, copied into one buffer of words; a sample's
+//! layout, its pair or frame names, only when it changes), the other messages encoded
+//! (JSON or protobuf), back to back in one buffer, and the impacts as copies of their
+//! records. A full batch goes to the sink thread, which lays each sample's numbers out on
+//! its own copy of the record and encodes it
+//! ([`StateRecord::append_json`](super::records::StateRecord::append_json),
+//! [`append_frame_transforms`](super::foxglove::append_frame_transforms)), encodes the
+//! three messages of an impact (its ledger entry on `/impacts`, its arrow on `/scene`, its
+//! line on `/log`) and writes every message to the `mcap::Writer`.
 //!
-//! The samples used to be copied into the batch and encoded here (issue 16): the copies
-//! cost about what the encoding does, and a short run's batches are mostly new ones, so
-//! the copies allocated (each `/tf` sample's frame names, each `/state` sample's vectors):
-//! on Kane's pendulum (5 s, 100 Hz) encoding on the calling thread is 1.0M instructions
-//! fewer per run over both threads.
+//! Where the samples are encoded (issue 16): copied as records (vectors, names) and encoded
+//! here, the copies allocated (a short run's batches are mostly new ones) and cost about
+//! what the encoding does; encoded on the calling thread, they were half of what logging
+//! cost the simulation thread (Kane's pendulum, 5 s at 100 Hz: 4,400 of the 8,600
+//! instructions of a sample), while this thread, which compresses, had time to spare on a
+//! second core. As numbers they cost the calling thread a copy of ~40 words and allocate
+//! nothing: 1.9M instructions fewer per run on the simulation thread, 0.5M more over both.
+//! They go as numbers only while this thread keeps up ([`Sink::defers_samples`]): where
+//! the simulation is cheaper per sample than writing it (the end of that run), or with no
+//! core to spare, the calling thread encodes them, as before.
 //!
 //! The schemas and channels are registered on the sink thread right before the first
 //! message, so that they share its chunk: a chunk that held only schemas and channels
 //! (which a metadata record written next would close) has no message index, and readers
 //! that bundle `@mcap/core` before 2025 (Foxglove Studio 1.48 among them) refuse such a
 //! file. The channel ids are fixed in advance ([`ChannelSpec::id`]), so the calling side
-//! can stamp its messages before the channels exist. The simulation thread thus pays the
-//! encoding of a sample, and the compression and the I/O overlap with the simulation. Batches
+//! can stamp its messages before the channels exist. Batches
 //! and metadata go through one bounded channel, in order, so the file's bytes are those a
 //! writer on the calling thread would produce: two runs of the same scene still give
 //! byte-identical logs. Sending messages in batches keeps the cost of the channel (a
@@ -38,7 +45,7 @@
 //! holding everything given so far.
 
 use std::io::{Seek, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
@@ -48,9 +55,15 @@ use mcap::records::{MessageHeader, Metadata};
 
 use super::LogError;
 use super::draw::{self, ArrowStyle};
-use super::foxglove::{LogLevel, SceneUpdate, append_protobuf};
-use super::records::ImpactRecord;
+use super::foxglove::{
+    FrameTransforms, LogLevel, SceneUpdate, append_frame_transforms, append_protobuf,
+};
+use super::records::{ImpactRecord, StateRecord};
 use super::run::impact_line;
+use super::samples::{
+    apply_state_words, apply_transforms_words, same_state_layout, same_transforms_layout,
+    state_words, transforms_words,
+};
 use super::schemas::Topic;
 use super::writer::log_message;
 
@@ -76,6 +89,12 @@ pub(super) struct ChannelSpec {
 enum Payload {
     /// Encoded bytes, `bytes[start..end]` of the batch.
     Bytes { start: usize, end: usize },
+    /// A `/state` sample: its numbers from `words[at..]`, laid out on the sink thread's
+    /// record, which first becomes a copy of `state_layouts[k]` for a `layout` `Some(k)`
+    /// (see `samples.rs`).
+    State { at: usize, layout: Option<usize> },
+    /// A `/tf` sample: likewise, on the sink thread's transforms (`tf_layouts`).
+    Transforms { at: usize, layout: Option<usize> },
     /// The ledger entry of impact slot `k` (`/impacts`, JSON).
     Impact(usize),
     /// The arrow of impact slot `k` (`/scene`, protobuf).
@@ -97,6 +116,12 @@ pub(super) struct Batch {
     messages: Vec<(MessageHeader, Payload)>,
     /// Bytes of the messages encoded on the calling thread, back to back.
     bytes: Vec<u8>,
+    /// Numbers of the `/state` and `/tf` samples, back to back (see `samples.rs`).
+    words: Vec<u64>,
+    /// New layouts of `/state` samples (rare: the first sample, a change of listed pairs).
+    state_layouts: Vec<StateRecord>,
+    /// New layouts of `/tf` samples.
+    tf_layouts: Vec<FrameTransforms>,
     /// Impacts; the first `n_impacts` are in use.
     impacts: Vec<ImpactSlot>,
     n_impacts: usize,
@@ -106,7 +131,20 @@ impl Batch {
     fn clear(&mut self) {
         self.messages.clear();
         self.bytes.clear();
+        self.words.clear();
+        self.state_layouts.clear();
+        self.tf_layouts.clear();
         self.n_impacts = 0;
+    }
+
+    /// An empty batch with the capacities of this one's buffers.
+    fn empty_like(&self) -> Batch {
+        Batch {
+            messages: Vec::with_capacity(self.messages.capacity()),
+            bytes: Vec::with_capacity(self.bytes.capacity()),
+            words: Vec::with_capacity(self.words.capacity()),
+            ..Batch::default()
+        }
     }
 
     fn is_full(&self) -> bool {
@@ -209,9 +247,20 @@ pub(super) struct Sink<W: Write + Seek + Send + 'static> {
     commands: Option<SyncSender<Command>>,
     /// The batch being filled.
     open: Batch,
+    /// The layout of the last `/state` sample sent, which the sink thread holds.
+    state_layout: Option<StateRecord>,
+    /// The layout of the last `/tf` sample sent.
+    tf_layout: Option<FrameTransforms>,
     /// Batches coming back from the sink thread, for reuse.
     spare: Receiver<Batch>,
     failure: Arc<Failure>,
+    /// Batches sent to the sink thread.
+    sent: u64,
+    /// Batches the sink thread has written (it counts them).
+    written: Arc<AtomicU64>,
+    /// Tests: whether samples go as numbers whatever the sink thread's progress.
+    #[cfg(test)]
+    pub(super) defer: Option<bool>,
     thread: Option<JoinHandle<Option<Result<W, McapError>>>>,
 }
 
@@ -231,20 +280,30 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             in_chunk: 0,
             chunks: 0,
             encoded: Vec::new(),
+            state: None,
+            tf: None,
         };
         let (commands, inbox) = sync_channel(QUEUE);
         let (recycle, spare) = sync_channel(QUEUE + 2);
         let failure = Arc::new(Failure::default());
         let shared = Arc::clone(&failure);
+        let written = Arc::new(AtomicU64::new(0));
+        let counter = Arc::clone(&written);
         let thread = std::thread::Builder::new()
             .name("ricochet-log".to_owned())
-            .spawn(move || serve(writing, &inbox, &recycle, &shared))
+            .spawn(move || serve(writing, &inbox, &recycle, (&shared, &counter)))
             .map_err(LogError::Thread)?;
         Ok(Sink {
             commands: Some(commands),
             open: Batch::default(),
+            state_layout: None,
+            tf_layout: None,
             spare,
             failure,
+            sent: 0,
+            written,
+            #[cfg(test)]
+            defer: None,
             thread: Some(thread),
         })
     }
@@ -267,6 +326,71 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.open
             .messages
             .push((header, Payload::Bytes { start, end }));
+        self.send_if_full()
+    }
+
+    /// Whether to hand the next sample to the sink thread as numbers, to be encoded there
+    /// (see `samples.rs`): unless that thread is behind, a whole batch waiting for it
+    /// besides the one it writes. Where the simulation is cheap (a pendulum sliding
+    /// steadily: ~1 µs of its thread per sample) and the sink thread slower than it
+    /// (writing and compressing a sample's two messages: ~2 µs), the calling thread
+    /// encodes the samples itself again, so that less remains to do when the run ends;
+    /// with no second core to spare, it thus does what it did before samples went as
+    /// numbers. The bytes are the same either way.
+    pub(super) fn defers_samples(&self) -> bool {
+        #[cfg(test)]
+        if let Some(defer) = self.defer {
+            return defer;
+        }
+        self.sent
+            .saturating_sub(self.written.load(Ordering::Acquire))
+            < 2
+    }
+
+    /// Adds the `/state` sample `state` (its numbers, and its layout if it is new; encoded
+    /// on the sink thread), to be written with `header`.
+    pub(super) fn push_state(
+        &mut self,
+        header: MessageHeader,
+        state: &StateRecord,
+    ) -> Result<(), LogError> {
+        self.failure.take()?;
+        let batch = &mut self.open;
+        let layout = match &mut self.state_layout {
+            Some(last) if same_state_layout(last, state) => None,
+            last => {
+                batch.state_layouts.push(state.clone());
+                *last = Some(state.clone());
+                Some(batch.state_layouts.len() - 1)
+            }
+        };
+        let at = batch.words.len();
+        state_words(&mut batch.words, state);
+        batch.messages.push((header, Payload::State { at, layout }));
+        self.send_if_full()
+    }
+
+    /// Adds the `/tf` sample `tf`, which must be
+    /// [plain](super::samples::plain_transforms) (its numbers, and its layout if it is
+    /// new; encoded on the sink thread), to be written with `header`.
+    pub(super) fn push_transforms(
+        &mut self,
+        header: MessageHeader,
+        tf: &FrameTransforms,
+    ) -> Result<(), LogError> {
+        self.failure.take()?;
+        let batch = &mut self.open;
+        let layout = match &mut self.tf_layout {
+            Some(last) if same_transforms_layout(last, tf) => None,
+            last => {
+                batch.tf_layouts.push(tf.clone());
+                *last = Some(tf.clone());
+                Some(batch.tf_layouts.len() - 1)
+            }
+        };
+        let at = batch.words.len();
+        transforms_words(&mut batch.words, tf);
+        (batch.messages).push((header, Payload::Transforms { at, layout }));
         self.send_if_full()
     }
 
@@ -333,9 +457,12 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         if self.open.messages.is_empty() {
             return Ok(());
         }
-        let mut next = self.spare.try_recv().unwrap_or_default();
+        // A new batch (the sink thread still holds the others) starts with the capacities
+        // of this one, so that it does not grow message by message.
+        let mut next = (self.spare.try_recv()).unwrap_or_else(|_| self.open.empty_like());
         next.clear();
         let full = std::mem::replace(&mut self.open, next);
+        self.sent += 1;
         self.send(Command::Messages(full))
     }
 
@@ -396,8 +523,12 @@ struct Writing<W: Write + Seek> {
     in_chunk: u64,
     /// Chunks closed so far.
     chunks: u64,
-    /// The samples encoded here, reused.
+    /// The messages encoded here, reused.
     encoded: Vec<u8>,
+    /// The `/state` record that samples are laid out on (see `samples.rs`).
+    state: Option<StateRecord>,
+    /// The `/tf` transforms that samples are laid out on.
+    tf: Option<FrameTransforms>,
 }
 
 impl<W: Write + Seek> Writing<W> {
@@ -414,6 +545,26 @@ impl<W: Write + Seek> Writing<W> {
         for (header, payload) in &batch.messages {
             let data = match *payload {
                 Payload::Bytes { start, end } => &batch.bytes[start..end],
+                Payload::State { at, layout } => {
+                    if let Some(k) = layout {
+                        self.state = batch.state_layouts.get(k).cloned();
+                    }
+                    let state = self.state.as_mut().ok_or_else(no_layout)?;
+                    apply_state_words(state, batch.words.get(at..).unwrap_or_default());
+                    self.encoded.clear();
+                    state.append_json(&mut self.encoded);
+                    &self.encoded[..]
+                }
+                Payload::Transforms { at, layout } => {
+                    if let Some(k) = layout {
+                        self.tf = batch.tf_layouts.get(k).cloned();
+                    }
+                    let tf = self.tf.as_mut().ok_or_else(no_layout)?;
+                    apply_transforms_words(tf, batch.words.get(at..).unwrap_or_default());
+                    self.encoded.clear();
+                    append_frame_transforms(&mut self.encoded, tf);
+                    &self.encoded[..]
+                }
                 Payload::Impact(k) => {
                     self.encoded.clear();
                     let record = &batch.impacts[k].record;
@@ -475,7 +626,7 @@ fn serve<W: Write + Seek>(
     mut writing: Writing<W>,
     inbox: &Receiver<Command>,
     recycle: &SyncSender<Batch>,
-    failure: &Failure,
+    (failure, done): (&Failure, &AtomicU64),
 ) -> Option<Result<W, McapError>> {
     let mut broken = false;
     for command in inbox {
@@ -486,6 +637,7 @@ fn serve<W: Write + Seek>(
                 } else {
                     writing.messages(&batch)
                 };
+                done.fetch_add(1, Ordering::Release);
                 // The batch goes back for reuse; if the pool is full, it is dropped.
                 let _ = recycle.try_send(batch);
                 written
@@ -517,6 +669,14 @@ fn serve<W: Write + Seek>(
         }
     }
     None
+}
+
+/// A sample reached the sink thread before its layout (which the calling side sends
+/// first: not expected).
+fn no_layout() -> LogError {
+    LogError::SinkFailed {
+        cause: "a sample reached the log writer's thread without its layout".to_owned(),
+    }
 }
 
 /// The `/scene` update of an impact: its arrow, `length` (m) long in `style`.

@@ -17,6 +17,7 @@ use super::foxglove::{
     first_non_finite_scene, first_non_finite_transforms, nanoseconds, timestamp,
 };
 use super::records::{Audit, ImpactRecord, StateRecord};
+use super::samples::plain_transforms;
 use super::schemas::{FORMAT_VERSION, Topic, metadata};
 use super::sink::{ChannelSpec, Sink, append_json};
 
@@ -70,8 +71,9 @@ const LIBRARY: &str = concat!("ricochet ", env!("CARGO_PKG_VERSION"));
 /// refused with [`LogError::NonFinite`] naming the field. A refused message is not
 /// written, and the writer stays usable.
 ///
-/// Messages are encoded on the calling thread (an impact's three are copied and encoded on
-/// the writer thread) and handed in batches, in order, through a bounded channel to the
+/// Messages are encoded on the calling thread (a `/state` or `/tf` sample is copied as its
+/// numbers unless the writer thread is behind, an impact's three messages as its record,
+/// and encoded on the writer thread) and handed in batches, in order, through a bounded channel to the
 /// thread of the `mcap::Writer`, which compresses the chunks and writes them out, so that
 /// logging overlaps with the simulation and the bytes are the same as a single-threaded
 /// writer's (see `sink.rs`). An I/O error is therefore reported by the call after the one whose message
@@ -181,6 +183,12 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
             });
         }
         let time = nanoseconds(state.t)?;
+        if self.mcap.defers_samples() {
+            let header = self.header(Topic::State, time);
+            self.mcap.push_state(header, state)?;
+            self.advance(Topic::State);
+            return Ok(());
+        }
         let start = self.mcap.buffer().len();
         state.append_json(self.mcap.buffer());
         self.push(Topic::State, time, start)
@@ -260,6 +268,12 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
                 field,
             });
         }
+        if self.mcap.defers_samples() && plain_transforms(transforms) {
+            let header = self.header(Topic::Tf, time);
+            self.mcap.push_transforms(header, transforms)?;
+            self.advance(Topic::Tf);
+            return Ok(());
+        }
         let start = self.mcap.buffer().len();
         append_frame_transforms(self.mcap.buffer(), transforms);
         self.push(Topic::Tf, time, start)
@@ -286,6 +300,13 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
     /// writer, flushed.
     pub fn finish(self) -> Result<W, LogError> {
         self.mcap.finish()
+    }
+
+    /// Tests: samples as numbers (`Some(true)`), encoded here (`Some(false)`), or as the
+    /// writer thread's progress decides (`None`).
+    #[cfg(test)]
+    pub(super) fn defer_samples(&mut self, defer: Option<bool>) {
+        self.mcap.defer = defer;
     }
 
     /// A scene update on `topic`, refused if it holds a NaN or an infinity.
