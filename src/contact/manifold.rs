@@ -136,7 +136,7 @@ fn order_along_tangent(points: &mut ContactPoints) {
 
 /// Whether parry's dispatcher sends a pair of shapes `(a, b)` to its manifold of a
 /// polygonal shape on a half-space (`contact_manifold_halfspace_pfm`, with `a` the
-/// polygonal one), which [`plane_points`] computes itself: `b` a half-space, `a` a segment,
+/// polygonal one), which `plane_points` computes itself: `b` a half-space, `a` a segment,
 /// a cuboid, a triangle, a convex polygon, or one of them rounded (a capsule is a rounded
 /// segment). Every other pair (a ball, a polyline, two bodies' shapes) keeps parry's query.
 pub fn is_plane_pair(a: &dyn Shape, b: &dyn Shape) -> bool {
@@ -346,7 +346,7 @@ impl ClosedVertex {
     }
 
     /// The vertex's contact with the half-space of the pair `p` (the pair it was found
-    /// for) at the poses of `data`: [`PlaneManifold`]'s point of the vertex, the same
+    /// for) at the poses of `data`: `PlaneManifold`'s point of the vertex, the same
     /// operations (with no rounding), so the same numbers as the query's point. `None` —
     /// take the query — when the support feature of the shape towards the half-space no
     /// longer holds the vertex (a box tipped over past its side), or when its gap exceeds

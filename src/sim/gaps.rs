@@ -30,7 +30,7 @@ pub const SLOTS: usize = 7;
 /// | 3 + 3j | the Painlevé coefficient (1/kg) | point j slides | sliding cannot be held |
 ///
 /// Every event is a closing crossing (`> 0` to `≤ 0`). `j` is the rank of the point among
-/// the closed points of its pair, in the order of [`Persistent::closed`].
+/// the closed points of its pair, in the order of `Persistent::closed`.
 pub fn slot(pair: PairId, s: usize) -> usize {
     SLOTS * pair.index() + s
 }
@@ -187,7 +187,7 @@ fn gap_stays_positive(g0: Real, v0: Real, grav: Real, h: Real) -> Option<Real> {
     (v0 >= 0.0 && v_bar.is_finite() && g0 > 2.0 * v_bar * h).then_some(v_bar)
 }
 
-/// What the stand-ins of the force functions did in a run (see [`StandIns`]).
+/// What the stand-ins of the force functions did in a run (see `StandIns`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StandInCounts {
     /// Interior samples of the event location with closed points.
@@ -377,7 +377,7 @@ impl<'m> GapFunctions<'m> {
     }
 
     /// Replaces the closed points (`mu` from their pairs, after overrides), with room for
-    /// their evaluations ([`Persistent::set`]).
+    /// their evaluations (`Persistent::set`).
     pub fn set_closed(&mut self, closed: Vec<super::Closed>, mu: Vec<Real>) {
         let k = closed.len();
         (self.here.closed).reserve(k.saturating_sub(self.here.closed.len()));
@@ -391,7 +391,7 @@ impl<'m> GapFunctions<'m> {
     }
 
     /// Starts the event location of the step `[t0, t1]` whose right-hand sides gave the
-    /// force functions the bounds `stages` ([`Persistent::bounds`] of the ODE system, whose
+    /// force functions the bounds `stages` (`Persistent::bounds` of the ODE system, whose
     /// closed points are these). `stand_ins` false: none in this step.
     pub fn begin_step(
         &mut self,
@@ -964,7 +964,7 @@ impl EventFunctions for GapFunctions<'_> {
     }
 
     /// Zero rates after an interior sample that computed nothing (every function has a
-    /// positive stand-in, see [`StandIns`]), else [`EventFunctions::rates`].
+    /// positive stand-in, see `StandIns`), else [`EventFunctions::rates`].
     fn interior_rates(
         &mut self,
         t: Real,
