@@ -414,12 +414,17 @@ pub(crate) mod tests {
     /// other modules use it too.
     pub(crate) struct Lcg(pub(crate) u64);
     impl Lcg {
+        /// Uniform in `[−1, 1)`.
         pub(crate) fn next(&mut self) -> Real {
+            self.unit() * 2.0 - 1.0
+        }
+        /// Uniform in `[0, 1)`.
+        pub(crate) fn unit(&mut self) -> Real {
             self.0 = self
                 .0
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
+            (self.0 >> 11) as Real / (1u64 << 53) as Real
         }
         fn matrix(&mut self, m: usize, n: usize) -> DMatrix<Real> {
             DMatrix::from_fn(m, n, |_, _| self.next())

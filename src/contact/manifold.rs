@@ -189,19 +189,25 @@ impl PlaneManifold {
             return None;
         }
         let ((pfm, radius), halfspace) = (a.as_polygonal_feature_map()?, b.as_halfspace()?);
+        let mut m = Self::frame((pose_a, pose_b), halfspace.normal, radius);
+        pfm.local_support_feature(-m.n_a, &mut m.feature);
+        Some(m)
+    }
+
+    /// The manifold's frame for a half-space of normal `n` (in its own frame) and a
+    /// rounding `radius` of `a`, with no feature yet.
+    #[inline]
+    fn frame((pose_a, pose_b): (&Pose, &Pose), n: Vec2, radius: Real) -> Self {
         let pos_ba = pose_a.inv_mul(pose_b).inverse();
-        let n = halfspace.normal;
         let n_a = pos_ba.rotation.inverse() * n;
-        let mut feature = PolygonalFeature::default();
-        pfm.local_support_feature(-n_a, &mut feature);
-        Some(Self {
+        Self {
             radius,
             n,
             n_a,
             pos_ba,
             normal: pose_a.rotation * -n_a,
-            feature,
-        })
+            feature: PolygonalFeature::default(),
+        }
     }
 
     /// The vertices of the support feature (in the frame of `a`'s shape).
@@ -361,55 +367,33 @@ impl ClosedVertex {
     ) -> Result<Option<PairContact>, ContactError> {
         let pose_a = collider_pose(model, data, p.a)?;
         let pose_b = collider_pose(model, data, p.b)?;
-        let pos_ba = pose_a.inv_mul(&pose_b).inverse();
-        let n = self.n;
-        let n_a = pos_ba.rotation.inverse() * n;
+        let poses = (&pose_a, &pose_b);
+        // The vertex has no rounding: `PlaneManifold` with `r = 0`.
+        let mut m = PlaneManifold::frame(poses, self.n, 0.0);
         let mut v = self.v;
         if !self.always {
             let shape = &*model.colliders()[p.a.index()].shape.0;
             let Some((pfm, _)) = shape.as_polygonal_feature_map() else {
                 return Ok(None);
             };
-            let mut feature = PolygonalFeature::default();
-            pfm.local_support_feature(-n_a, &mut feature);
-            let k = feature.num_vertices.min(feature.vertices.len());
-            match feature.vertices[..k].iter().find(|w| **w == v) {
+            pfm.local_support_feature(-m.n_a, &mut m.feature);
+            // The feature's own vertex (its signed zeros, as the query takes it).
+            match m.vertices().iter().find(|w| **w == v) {
                 Some(&w) => v = w,
                 None => return Ok(None),
             }
         }
-        // `PlaneManifold::point` with `r = 0`.
-        let radius: Real = 0.0;
-        let v_b = pos_ba * v;
-        let to_plane = v_b.dot(n);
-        let gap = to_plane - radius;
-        Ok((gap <= tolerance).then(|| PairContact {
-            gap,
-            point_a: pose_a.transform_point(v - n_a * radius),
-            point_b: pose_b.transform_point(v_b - n * to_plane),
-            normal: pose_a.rotation * -n_a,
-        }))
+        Ok(m.point(poses, v, tolerance))
     }
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::linalg::tests::Lcg;
     use parry2d_f64::shape::{
         Capsule, ConvexPolygon, Cuboid, HalfSpace, RoundShape, Segment, SharedShape, Triangle,
     };
-
-    /// A small deterministic generator of uniform numbers in `[0, 1)`.
-    pub(crate) struct Lcg(pub u64);
-
-    impl Lcg {
-        pub(crate) fn next(&mut self) -> Real {
-            self.0 = (self.0)
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as Real / (1u64 << 53) as Real
-        }
-    }
 
     /// Whether two contacts are the same to the bit (`Debug` prints the shortest string
     /// that reads back to the same `f64`, and tells `−0` from `0`).
@@ -478,10 +462,10 @@ pub(crate) mod tests {
             assert!(is_plane_pair(a, b), "{name}");
             let mut counts = [0usize; 3];
             for _ in 0..20_000 {
-                let angle = std::f64::consts::PI * (2.0 * rng.next() - 1.0);
-                let at = Vec2::new(4.0 * rng.next() - 2.0, 3.0 * rng.next() - 1.5);
+                let angle = std::f64::consts::PI * (2.0 * rng.unit() - 1.0);
+                let at = Vec2::new(4.0 * rng.unit() - 2.0, 3.0 * rng.unit() - 1.5);
                 let pose_a = pose_b * Pose::new(at, angle);
-                let tolerance = [0.05, 0.5, 2.0][(3.0 * rng.next()) as usize];
+                let tolerance = [0.05, 0.5, 2.0][(3.0 * rng.unit()) as usize];
                 let fast = plane_points(a, b, (&pose_a, &pose_b), tolerance);
                 let mut query = query_points((a, b), (&pose_a, &pose_b), tolerance, &mut ws);
                 order_along_tangent(&mut query);

@@ -153,15 +153,21 @@ fn pair_points_of(
 ) -> Result<arrayvec::ArrayVec<(PairContact, Vec2), 2>, SimError> {
     let t = data.time;
     let points = contact_points_of(model, data, (pair, p), tolerance, ws).map_err(|e| e.at(t))?;
-    let pose = match model.colliders()[p.a.index()].body {
-        Some(b) => data.body_pose[b.index()],
-        None => Pose::IDENTITY,
-    };
+    let pose = body_pose_of_a(model, data, p);
     let mut out = arrayvec::ArrayVec::new();
     for c in points {
         out.push((c, pose.inverse_transform_point(c.point_a)));
     }
     Ok(out)
+}
+
+/// The pose of the body of the pair's collider `a` (the identity for an obstacle): the
+/// frame of the closed points' `local`.
+fn body_pose_of_a(model: &Model, data: &Data, p: &ContactPair) -> Pose {
+    match model.colliders()[p.a.index()].body {
+        Some(b) => data.body_pose[b.index()],
+        None => Pose::IDENTITY,
+    }
 }
 
 /// The results of the last evaluation of the closed points' constrained dynamics
@@ -966,10 +972,7 @@ impl PointScratch {
         };
         let nearest = match cached {
             Some(c) => {
-                let pose = match model.colliders()[p.a.index()].body {
-                    Some(b) => data.body_pose[b.index()],
-                    None => Pose::IDENTITY,
-                };
+                let pose = body_pose_of_a(model, data, p);
                 Some((c, pose.inverse_transform_point(c.point_a)))
             }
             None => {
@@ -1086,7 +1089,8 @@ mod tests {
     /// vertex.
     #[test]
     fn closed_vertices_give_the_query_s_points() {
-        use crate::contact::manifold_tests::{Lcg, bitwise};
+        use crate::contact::manifold_tests::bitwise;
+        use crate::linalg::tests::Lcg;
         let mut rng = Lcg(11);
         for name in [
             "kane_double_pendulum",
@@ -1122,8 +1126,8 @@ mod tests {
             let mut scratch = PointScratch::new(model);
             let (mut taken, mut fallbacks, mut turned) = (0, 0, 0);
             for k in 0..2000 {
-                let q: Vec<Real> = q0.iter().map(|x| x + 1.5 * (rng.next() - 0.5)).collect();
-                let u: Vec<Real> = u0.iter().map(|_| 6.0 * (rng.next() - 0.5)).collect();
+                let q: Vec<Real> = q0.iter().map(|x| x + 1.5 * (rng.unit() - 0.5)).collect();
+                let u: Vec<Real> = u0.iter().map(|_| 6.0 * (rng.unit() - 0.5)).collect();
                 let t = 0.001 * k as Real;
                 forward_kinematics(model, &mut data, t, &q, &u).unwrap();
                 for &(pair, p, local, v) in &closed {
