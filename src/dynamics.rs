@@ -27,10 +27,12 @@
 use nalgebra::{Cholesky, DMatrix, DVectorViewMut, Dyn, SymmetricEigen};
 
 use crate::articulated::ArticulatedFactor;
-use crate::kinematics::{KinematicsError, check_len, update_positions, update_velocities};
-use crate::math::{Pose, Real};
+use crate::kinematics::{
+    KinematicsError, check_len, move_joint, place_joint, update_positions, update_velocities,
+};
+use crate::math::{Pose, Real, Vec2};
 use crate::model::spatial::{Inertia, Twist, Wrench};
-use crate::model::{JointId, Model};
+use crate::model::{Body, Joint, JointId, JointKind, Model};
 use crate::state::Data;
 use crate::tree_matrix::{TreeMatrix, TreePattern};
 
@@ -197,20 +199,12 @@ impl MassFactor {
     ///
     /// Returns the smallest eigenvalue of `m` if it is not positive definite (computed on
     /// that cold path only, for at most [`EIGENVALUE_EVIDENCE_MAX`] speeds; NaN beyond).
+    #[inline]
     fn factor(&mut self, m: &TreeMatrix) -> Result<(), Real> {
         self.valid = false;
         let ok = match &mut self.storage {
             FactorStorage::Tree(l) => l.factor_ltl_from(m).is_ok(),
-            FactorStorage::Dense2(l) => {
-                let (m00, m10, m11) = (m.row(0)[0], m.row(1)[1], m.row(1)[0]);
-                match cholesky_2x2(m00, m10, m11) {
-                    Some(f) => {
-                        *l = f;
-                        true
-                    }
-                    None => false,
-                }
-            }
+            FactorStorage::Dense2(l) => factor_2x2(m, l),
             FactorStorage::Dense { chol, spare, n } => {
                 let mut buf = match (chol.take(), spare.take()) {
                     (Some(c), _) => c.unpack_dirty(),
@@ -303,6 +297,7 @@ impl MassFactor {
 
     /// Solves `M x = b` in place (`b` becomes `x`): `Lᵀ y = b` backward, then `L x = y`
     /// forward (`L y = b`, `Lᵀ x = y` for the dense factor).
+    #[inline]
     pub fn solve_in_place(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
@@ -357,6 +352,60 @@ fn cholesky_2x2(m00: Real, m10: Real, m11: Real) -> Option<[Real; 3]> {
         return None;
     }
     Some([l00, l10, d.sqrt()])
+}
+
+/// [`cholesky_2x2`] of the `2 × 2` matrix `m` (the full pattern of two speeds, stored as
+/// `[M₀₀ | M₁₁, M₁₀]`, [`TreeMatrix::row`]) into `l`; `false` (and `l` unchanged) where it
+/// fails or `m` has no storage.
+#[inline(always)]
+fn factor_2x2(m: &TreeMatrix, l: &mut [Real; 3]) -> bool {
+    let &[m00, m11, m10] = m.values() else {
+        return false;
+    };
+    match cholesky_2x2(m00, m10, m11) {
+        Some(f) => {
+            *l = f;
+            true
+        }
+        None => false,
+    }
+}
+
+/// The end of [`forward_dynamics_with`] for a factor of two speeds
+/// ([`FactorStorage::Dense2`]), with the mass matrix and the bias forces in `data`: the
+/// factorization ([`factor_mass_matrix`]), `u̇ = M⁻¹ (τ − h)` ([`MassFactor::solve_in_place`])
+/// and its check, the same operations in the same order on the stack. Returns `None` if the
+/// factor is not the `2 × 2` one.
+#[inline(always)]
+fn solve_2x2(data: &mut Data, t: Real, tau: Option<&[Real]>) -> Option<Result<(), DynamicsError>> {
+    let Data {
+        mass,
+        mass_factor,
+        bias,
+        udot,
+        ..
+    } = data;
+    let FactorStorage::Dense2(l) = &mut mass_factor.storage else {
+        return None;
+    };
+    mass_factor.valid = false;
+    if !factor_2x2(mass, l) {
+        return Some(Err(DynamicsError::NotPositiveDefinite {
+            t,
+            min_eigenvalue: smallest_eigenvalue(mass),
+        }));
+    }
+    mass_factor.valid = true;
+    let h = &bias.as_slice()[..2];
+    let mut x = match tau {
+        Some(tau) => [tau[0] - h[0], tau[1] - h[1]],
+        None => [0.0 - h[0], 0.0 - h[1]],
+    };
+    solve_lower_2x2(l, &mut x);
+    solve_upper_2x2(l, &mut x);
+    let udot = &mut udot.as_mut_slice()[..2];
+    udot.copy_from_slice(&x);
+    Some(check_finite(t, "udot", udot))
 }
 
 /// `b ← L⁻¹ b` for the `2 × 2` factor `l = [L₀₀, L₁₀, L₁₁]`, forward, as nalgebra's
@@ -534,49 +583,101 @@ fn tree_mass_matrix(
     model: &Model,
     (frames, subspace, body_inertia): (&[Pose], &[[Twist; 3]], &[Inertia]),
     composite: &mut [Inertia],
-    mut set: impl FnMut(usize, usize, Real),
+    set: impl FnMut(usize, usize, Real),
 ) {
     let joints = model.joints();
     let n = joints.len();
     // Sliced to the number of joints once: no bounds checks in the loops.
-    let (frames, subspace, composite) = (&frames[..n], &subspace[..n], &mut composite[..n]);
+    let (frames, composite) = (&frames[..n], &mut composite[..n]);
     // Composite inertias, leaves first.
     composite.copy_from_slice(&body_inertia[..n]);
     for (i, joint) in joints.iter().enumerate().rev() {
         if let Some(p) = joint.parent {
-            let mut ic = composite[i];
-            if joint.is_absolute() {
-                ic = ic.projected_at(frames[i].translation);
-            }
-            composite[p.index()] += ic;
+            composite[p.index()] += presented_inertia(joint.kind, &composite[i], &frames[i]);
         }
     }
-    // Rows: for each free coordinate, the wrench I^c S walked up to the root.
-    let composite = &*composite;
+    mass_rows(model, (frames, subspace), composite, set);
+}
+
+/// The composite inertia `I^c` of the subtree of a joint's body (of kind `kind`) as its
+/// parent sees it:
+/// `P_cᵀ I^c P_c`, the point mass at the joint for an absolute joint (whose frame is
+/// `frame`), `I^c` itself otherwise ([`mass_matrix`]).
+#[inline(always)]
+fn presented_inertia(kind: JointKind, composite: &Inertia, frame: &Pose) -> Inertia {
+    if kind.is_absolute() {
+        composite.projected_at(frame.translation)
+    } else {
+        *composite
+    }
+}
+
+/// The rows of the composite rigid body algorithm of [`mass_matrix`] from the composite
+/// inertias `composite`: `set(r, c, M_rc)` for every speed `r` and `c = r` or an ancestor
+/// of `r` ([`mass_row`]).
+#[inline(always)]
+fn mass_rows(
+    model: &Model,
+    kin: (&[Pose], &[[Twist; 3]]),
+    composite: &[Inertia],
+    mut set: impl FnMut(usize, usize, Real),
+) {
+    let joints = model.joints();
+    let composite = &composite[..joints.len()];
     for (i, joint) in joints.iter().enumerate() {
         let Some(si) = model.q_index(JointId(i)) else {
             continue;
         };
-        let s_i = &subspace[i];
         for k in 0..joint.kind.ndof() {
-            let r = si + k;
-            let mut f = composite[i].mul_twist(&s_i[k]);
-            for (k2, s) in s_i[..=k].iter().enumerate() {
-                set(r, si + k2, s.dot(&f));
+            let at = (i, joint.kind, si);
+            mass_row(model, kin, at, k, &composite[i], |c, _, m| {
+                set(si + k, c, m)
+            });
+        }
+    }
+}
+
+/// Row `r = s + k` of the mass matrix, the speed `k` of joint `i` (of kind `kind`, its
+/// first speed `s`) whose subtree has the composite inertia `composite` [F, §6.2]: the
+/// wrench `f = I^c S_k` walked up to the root (through `P_cᵀ` at each absolute joint),
+///
+/// ```text
+/// M_rc = S_cᵀ f        (c = r and each ancestor of r in the expanded parent array)
+/// ```
+///
+/// `set(c, d, M_rc)` for each, with `d = depth(r) − depth(c)` the entry's place in the row
+/// of a [`TreeMatrix`] (the diagonal first).
+#[inline(always)]
+fn mass_row(
+    model: &Model,
+    (frames, subspace): (&[Pose], &[[Twist; 3]]),
+    (i, kind, first): (usize, JointKind, usize),
+    k: usize,
+    composite: &Inertia,
+    mut set: impl FnMut(usize, usize, Real),
+) {
+    let joints = model.joints();
+    let s_i = &subspace[i];
+    // This joint's speeds up to r: depth(r) − depth(s + k2) = k − k2.
+    let mut f = composite.mul_twist(&s_i[k]);
+    for (k2, s) in s_i[..=k].iter().enumerate() {
+        set(first + k2, k - k2, s.dot(&f));
+    }
+    // The ancestors' speeds, each joint's last speed first in the row.
+    let mut depth = k + 1;
+    let (mut b, mut absolute) = (i, kind.is_absolute());
+    while let Some(p) = joints[b].parent {
+        if absolute {
+            f = f.projected_at(frames[b].translation);
+        }
+        b = p.index();
+        absolute = joints[b].is_absolute();
+        if let Some(sp) = model.q_index(JointId(b)) {
+            let nd = joints[b].kind.ndof();
+            for (k2, s) in subspace[b][..nd].iter().enumerate() {
+                set(sp + k2, depth + (nd - 1 - k2), s.dot(&f));
             }
-            let mut b = i;
-            while let Some(p) = joints[b].parent {
-                if joints[b].is_absolute() {
-                    f = f.projected_at(frames[b].translation);
-                }
-                b = p.index();
-                if let Some(sp) = model.q_index(JointId(b)) {
-                    let nd = joints[b].kind.ndof();
-                    for (k2, s) in subspace[b][..nd].iter().enumerate() {
-                        set(r, sp + k2, s.dot(&f));
-                    }
-                }
-            }
+            depth += nd;
         }
     }
 }
@@ -639,49 +740,91 @@ fn newton_euler(model: &Model, data: &mut Data, accel: FreeAccel<'_>) {
     let joint_effort = &mut joint_effort[..n];
     // Forward: accelerations and the net wrench each body needs.
     for (i, joint) in joints.iter().enumerate() {
-        let mut a = match joint.parent {
+        let parent = match joint.parent {
             Some(p) => body_accel[p.index()],
             None => Twist::ZERO,
         };
-        if joint.is_absolute() {
-            a = a.projected_at(joint_frame[i].translation);
-        }
-        a += body_accel_vp[i];
         let nd = joint.kind.ndof();
-        let s = subspace[i].iter().take(nd);
-        match (model.q_index(JointId(i)), free_accel) {
-            (Some(first), Some(acc)) => {
-                for (s_k, acc_k) in s.zip(&acc[first..first + nd]) {
-                    a += *s_k * *acc_k;
-                }
-            }
-            _ => {
-                for (s_k, qdd_k) in s.zip(&joint_qdd_prescribed[i]) {
-                    a += *s_k * *qdd_k;
-                }
-            }
-        }
-        let inertia = &body_inertia[i];
-        let v = &body_twist[i];
-        let weight = Wrench::force_at(g * inertia.m, body_com[i]);
+        let qdd = match (model.q_index(JointId(i)), free_accel) {
+            (Some(first), Some(acc)) => &acc[first..first + nd],
+            _ => &joint_qdd_prescribed[i][..],
+        };
+        let (a, f) = accelerate_body(
+            joint.kind,
+            parent,
+            (&joint_frame[i], &subspace[i]),
+            body_accel_vp[i],
+            qdd,
+            (&body_inertia[i], &body_twist[i], body_com[i]),
+            g,
+        );
         body_accel[i] = a;
-        body_wrench[i] = inertia.mul_twist(&a) + v.cross_force(&inertia.mul_twist(v)) - weight;
+        body_wrench[i] = f;
     }
     // Backward: joint efforts, and the wrench passed on to the parent.
     for (i, joint) in joints.iter().enumerate().rev() {
-        let f = body_wrench[i];
-        let nd = joint.kind.ndof();
-        for (e_k, s_k) in joint_effort[i].iter_mut().zip(&subspace[i]).take(nd) {
-            *e_k = s_k.dot(&f);
-        }
+        let f = effort_and_reaction(
+            joint.kind,
+            &body_wrench[i],
+            (&joint_frame[i], &subspace[i]),
+            &mut joint_effort[i],
+        );
         if let Some(p) = joint.parent {
-            let f = if joint.is_absolute() {
-                f.projected_at(joint_frame[i].translation)
-            } else {
-                f
-            };
             body_wrench[p.index()] += f;
         }
+    }
+}
+
+/// One body of the forward pass of [`newton_euler`] (its joint of kind `kind`): its spatial
+/// acceleration from its
+/// parent's `parent` (zero for a root), the joint frame and motion subspace, the
+/// velocity-product acceleration `c` and the joint accelerations `qdd` (the first `ndof`
+/// are used), and the net wrench its inertia, twist `v` and centre of mass `com` need,
+///
+/// ```text
+/// A_b = P_b A_parent + c_b + Σ S_k q̈_k
+/// F_b = I_b A_b + V_b ×* (I_b V_b) − (c_b × m_b g, m_b g)
+/// ```
+#[inline(always)]
+fn accelerate_body(
+    kind: JointKind,
+    parent: Twist,
+    (frame, s): (&Pose, &[Twist; 3]),
+    c: Twist,
+    qdd: &[Real],
+    (inertia, v, com): (&Inertia, &Twist, Vec2),
+    g: Vec2,
+) -> (Twist, Wrench) {
+    let mut a = parent;
+    if kind.is_absolute() {
+        a = a.projected_at(frame.translation);
+    }
+    a += c;
+    for (s_k, qdd_k) in s.iter().take(kind.ndof()).zip(qdd) {
+        a += *s_k * *qdd_k;
+    }
+    let weight = Wrench::force_at(g * inertia.m, com);
+    let f = inertia.mul_twist(&a) + v.cross_force(&inertia.mul_twist(v)) - weight;
+    (a, f)
+}
+
+/// One joint of the backward pass of [`newton_euler`] (of kind `kind`): the efforts `effort_k = S_kᵀ F_b`
+/// of the body's net wrench `f` into the first `ndof` entries of `effort` (the others are
+/// left as they are), and the wrench `P_bᵀ F_b` passed on to the parent.
+#[inline(always)]
+fn effort_and_reaction(
+    kind: JointKind,
+    f: &Wrench,
+    (frame, s): (&Pose, &[Twist; 3]),
+    effort: &mut [Real; 3],
+) -> Wrench {
+    for (e_k, s_k) in effort.iter_mut().zip(s).take(kind.ndof()) {
+        *e_k = s_k.dot(f);
+    }
+    if kind.is_absolute() {
+        f.projected_at(frame.translation)
+    } else {
+        *f
     }
 }
 
@@ -698,16 +841,27 @@ fn gather_free(model: &Model, data: &Data, out: &mut [Real]) {
     for (i, joint) in joints.iter().enumerate() {
         if let Some(s) = model.q_index(JointId(i)) {
             let e = &joint_effort[i];
-            // Entry by entry: `copy_from_slice` of an unknown length calls `memcpy`.
-            match &mut out[s..s + joint.kind.ndof()] {
-                [o0] => {
-                    *o0 = e[0] - joint.force.generalized_force(joint_q[i][0], joint_qd[i][0]);
-                }
-                [o0, o1] => [*o0, *o1] = [e[0], e[1]],
-                [o0, o1, o2] => [*o0, *o1, *o2] = [e[0], e[1], e[2]],
-                _ => {}
-            }
+            free_forces((joint, joint.kind), e, (&joint_q[i], &joint_qd[i]), s, out);
         }
+    }
+}
+
+/// One joint of [`gather_free`] (`joint`, of kind `kind` = `joint.kind`): `out[s..s +
+/// ndof] = effort − Q_force` for the joint coordinates and rates `(q, qd)`.
+#[inline(always)]
+fn free_forces(
+    (joint, kind): (&Joint, JointKind),
+    e: &[Real; 3],
+    (q, qd): (&[Real; 3], &[Real; 3]),
+    s: usize,
+    out: &mut [Real],
+) {
+    // Entry by entry: `copy_from_slice` of an unknown length calls `memcpy`.
+    match &mut out[s..s + kind.ndof()] {
+        [o0] => *o0 = e[0] - joint.force.generalized_force(q[0], qd[0]),
+        [o0, o1] => [*o0, *o1] = [e[0], e[1]],
+        [o0, o1, o2] => [*o0, *o1, *o2] = [e[0], e[1], e[2]],
+        _ => {}
     }
 }
 
@@ -838,10 +992,18 @@ pub fn forward_dynamics_with(
         check_finite(t, "tau", tau)?;
     }
     // Kinematics, h(t, q, u), the factor of M(q).
-    update_positions(model, data, t, q)?;
-    update_velocities(model, data, u)?;
-    bias_forces(model, data);
-    factor_mass(model, data, t)?;
+    if model.is_holonomic() && !data.mass_factor.is_articulated() {
+        tree_pass(model, data, t, q, u);
+        if let Some(done) = solve_2x2(data, t, tau) {
+            return done;
+        }
+        factor_mass_matrix(data, t)?;
+    } else {
+        update_positions(model, data, t, q)?;
+        update_velocities(model, data, u)?;
+        bias_forces(model, data);
+        factor_mass(model, data, t)?;
+    }
     // u̇ = M⁻¹ (τ − h).
     let (udot, bias) = (data.udot.as_mut_slice(), data.bias.as_slice());
     match tau {
@@ -866,6 +1028,199 @@ pub fn forward_dynamics_with(
         data.tree_accel = accel;
     }
     Ok(())
+}
+
+/// [`update_positions`], [`update_velocities`], [`bias_forces`] and [`mass_matrix`] of a
+/// holonomic model in one walk down the tree and one walk up, the stages of
+/// [`forward_dynamics_with`] before the factorization: down, each joint's positions, its
+/// velocities and the forward pass of the Newton–Euler algorithm [F, §5.3] (with `u̇ = 0`);
+/// up, the backward pass (the joint efforts and the bias forces `h`) and the composite
+/// inertias [F, §6.2]; then the rows of `M`.
+///
+/// Each joint goes through the same kernels as in the separate stages ([`place_joint`],
+/// [`move_joint`], [`accelerate_body`], [`effort_and_reaction`], [`presented_inertia`],
+/// [`free_forces`], [`mass_rows`]), in the same order, so every number is the one the
+/// stages give, bit for bit; what is saved is walking the tree four times and reloading
+/// every joint's kinematics from the workspace between the stages.
+///
+/// Writes what the four stages write: `data.time`, every kinematics field, the Newton–Euler
+/// scratch, `data.bias`, `data.composite` and `data.mass`.
+fn tree_pass(model: &Model, data: &mut Data, t: Real, q: &[Real], u: &[Real]) {
+    data.time = t;
+    let n = model.joints().len();
+    let Data {
+        joint_q,
+        joint_qd,
+        joint_qdd_prescribed,
+        joint_frame,
+        subspace,
+        body_pose,
+        body_com,
+        body_inertia,
+        body_twist,
+        body_twist_remainder,
+        body_accel_vp,
+        body_accel,
+        body_wrench,
+        composite,
+        joint_effort,
+        mass,
+        bias,
+        ..
+    } = data;
+    // Every per-joint array sliced to the number of joints once: no bounds checks in the
+    // loops.
+    let mut tree = TreePass {
+        model,
+        t,
+        q,
+        u,
+        joint_q: &mut joint_q[..n],
+        joint_qd: &mut joint_qd[..n],
+        joint_qdd_prescribed: &mut joint_qdd_prescribed[..n],
+        joint_frame: &mut joint_frame[..n],
+        subspace: &mut subspace[..n],
+        body_pose: &mut body_pose[..n],
+        body_com: &mut body_com[..n],
+        body_inertia: &mut body_inertia[..n],
+        body_twist: &mut body_twist[..n],
+        body_twist_remainder: &mut body_twist_remainder[..n],
+        body_accel_vp: &mut body_accel_vp[..n],
+        body_accel: &mut body_accel[..n],
+        body_wrench: &mut body_wrench[..n],
+        composite: &mut composite[..n],
+        joint_effort: &mut joint_effort[..n],
+        bias: bias.as_mut_slice(),
+        mass,
+    };
+    // Down: positions, velocities, accelerations at u̇ = 0 and the net wrenches. Each
+    // joint's code is that of its kind alone for the revolute joints (the kind a literal).
+    let bodies = &model.bodies()[..n];
+    for (i, (joint, body)) in model.joints().iter().zip(bodies).enumerate() {
+        match joint.kind {
+            JointKind::Revolute { absolute: false } => {
+                tree.down((i, joint, JointKind::Revolute { absolute: false }), body);
+            }
+            JointKind::Revolute { absolute: true } => {
+                tree.down((i, joint, JointKind::Revolute { absolute: true }), body);
+            }
+            kind => tree.down((i, joint, kind), body),
+        }
+    }
+    // Up: the joint efforts and h, the rows of M, the wrenches and composite inertias passed
+    // on. Every stored entry of M is set: the matrix needs its storage, not zeros.
+    tree.mass.allocate();
+    for (i, joint) in model.joints().iter().enumerate().rev() {
+        match joint.kind {
+            JointKind::Revolute { absolute: false } => {
+                tree.up((i, joint, JointKind::Revolute { absolute: false }));
+            }
+            JointKind::Revolute { absolute: true } => {
+                tree.up((i, joint, JointKind::Revolute { absolute: true }));
+            }
+            kind => tree.up((i, joint, kind)),
+        }
+    }
+}
+
+/// The state of [`tree_pass`]: the model, the state and the workspace's per-joint arrays.
+struct TreePass<'a> {
+    model: &'a Model,
+    t: Real,
+    q: &'a [Real],
+    u: &'a [Real],
+    joint_q: &'a mut [[Real; 3]],
+    joint_qd: &'a mut [[Real; 3]],
+    joint_qdd_prescribed: &'a mut [[Real; 3]],
+    joint_frame: &'a mut [Pose],
+    subspace: &'a mut [[Twist; 3]],
+    body_pose: &'a mut [Pose],
+    body_com: &'a mut [Vec2],
+    body_inertia: &'a mut [Inertia],
+    body_twist: &'a mut [Twist],
+    body_twist_remainder: &'a mut [Twist],
+    body_accel_vp: &'a mut [Twist],
+    body_accel: &'a mut [Twist],
+    body_wrench: &'a mut [Wrench],
+    composite: &'a mut [Inertia],
+    joint_effort: &'a mut [[Real; 3]],
+    bias: &'a mut [Real],
+    mass: &'a mut TreeMatrix,
+}
+
+impl TreePass<'_> {
+    /// Joint `i` (`joint`, of kind `kind`, carrying `body`) on the way down: its positions,
+    /// velocities, acceleration at `u̇ = 0` and net wrench, after its parent's.
+    #[inline(always)]
+    fn down(&mut self, (i, joint, kind): (usize, &Joint, JointKind), body: &Body) {
+        let (pose, vp, vp_rem, ap) = match joint.parent {
+            Some(p) => {
+                let p = p.index();
+                (
+                    self.body_pose[p],
+                    self.body_twist[p],
+                    self.body_twist_remainder[p],
+                    self.body_accel[p],
+                )
+            }
+            None => (Pose::IDENTITY, Twist::ZERO, Twist::ZERO, Twist::ZERO),
+        };
+        let (model, t) = (self.model, self.t);
+        let place = place_joint(model, (i, joint, kind), body, t, self.q, &pose);
+        let at = (
+            place.frame.translation,
+            &place.subspace,
+            place.pose.translation,
+        );
+        let motion = move_joint(model, (i, joint, kind), t, self.u, (vp, vp_rem), at);
+        let at = (&place.frame, &place.subspace);
+        let body = (&place.inertia, &motion.twist, place.com);
+        let g = model.gravity();
+        let (a, f) = accelerate_body(kind, ap, at, motion.accel_vp, &place.qdd, body, g);
+        self.joint_q[i] = place.q;
+        self.joint_qdd_prescribed[i] = place.qdd;
+        self.joint_frame[i] = place.frame;
+        self.subspace[i] = place.subspace;
+        self.body_pose[i] = place.pose;
+        self.body_com[i] = place.com;
+        self.body_inertia[i] = place.inertia;
+        self.composite[i] = place.inertia;
+        self.joint_qd[i] = motion.qd;
+        self.body_twist[i] = motion.twist;
+        self.body_twist_remainder[i] = motion.remainder;
+        self.body_accel_vp[i] = motion.accel_vp;
+        self.body_accel[i] = a;
+        self.body_wrench[i] = f;
+    }
+
+    /// Joint `i` (`joint`, of kind `kind`) on the way up, after its children: its efforts,
+    /// its speeds' bias forces and rows of `M` (its composite inertia is complete), and the
+    /// wrench and composite inertia its parent gets.
+    #[inline(always)]
+    fn up(&mut self, (i, joint, kind): (usize, &Joint, JointKind)) {
+        let at = (&self.joint_frame[i], &self.subspace[i]);
+        let f = effort_and_reaction(kind, &self.body_wrench[i], at, &mut self.joint_effort[i]);
+        if let Some(s) = self.model.q_index(JointId(i)) {
+            let e = &self.joint_effort[i];
+            let rates = (&self.joint_q[i], &self.joint_qd[i]);
+            free_forces((joint, kind), e, rates, s, self.bias);
+            let kin = (&self.joint_frame[..], &self.subspace[..]);
+            for k in 0..kind.ndof() {
+                // The row's entries in the order of its storage (`TreeMatrix::row`).
+                let row = self.mass.row_mut(s + k);
+                let at = (i, kind, s);
+                mass_row(self.model, kin, at, k, &self.composite[i], |_, d, m| {
+                    row[d] = m
+                });
+            }
+        }
+        if let Some(p) = joint.parent {
+            let p = p.index();
+            self.body_wrench[p] += f;
+            let ic = presented_inertia(kind, &self.composite[i], &self.joint_frame[i]);
+            self.composite[p] += ic;
+        }
+    }
 }
 
 /// The right-hand side of the first-order system `ẏ = f(t, y)` with `y = [q; u]`:
@@ -969,6 +1324,7 @@ pub fn factor_mass(model: &Model, data: &mut Data, t: Real) -> Result<(), Dynami
 /// Factors the mass matrix already in `data.mass` (after [`mass_matrix`]) without solving
 /// the dynamics. `t` is reported in errors. A workspace that held the articulated-body
 /// factor gets a factor of `M` instead (allocating once); [`factor_mass`] needs no `M`.
+#[inline]
 pub fn factor_mass_matrix(data: &mut Data, t: Real) -> Result<(), DynamicsError> {
     if data.mass_factor.is_articulated() {
         data.mass_factor = MassFactor::new(data.mass.pattern().clone(), true);

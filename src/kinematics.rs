@@ -45,7 +45,7 @@ use nalgebra::Matrix2xX;
 
 use crate::math::{Pose, Real, Vec2, perp};
 use crate::model::spatial::{Inertia, Twist};
-use crate::model::{BodyId, ColliderId, JointId, JointKind, Model};
+use crate::model::{Body, BodyId, ColliderId, Joint, JointId, JointKind, Model};
 use crate::state::Data;
 
 /// A kinematics query that cannot be answered.
@@ -155,49 +155,94 @@ pub fn update_positions(
     let body_com = &mut data.body_com[..n];
     let body_inertia = &mut data.body_inertia[..n];
     for (i, (joint, body)) in joints.iter().zip(bodies).enumerate() {
-        // Joint coordinates: from the drive, from q, or none.
-        let mut jq = [0.0; 3];
-        let mut jqdd = [0.0; 3];
-        match (&joint.drive, model.q_index(JointId(i))) {
-            (Some(drive), _) => {
-                jq[0] = drive.position(t);
-                jqdd[0] = drive.acceleration(t);
-            }
-            (None, Some(s)) => copy_dofs(&mut jq, q, s, joint.kind.ndof()),
-            (None, None) => {}
-        }
-        // Joint frame in the world.
         let parent = joint
             .parent
             .map_or(Pose::IDENTITY, |p| body_pose[p.index()]);
-        let frame = if joint.is_absolute() {
-            Pose::from_parts(
-                parent.transform_point(joint.placement.translation),
-                joint.placement.rotation,
-            )
-        } else {
-            parent * joint.placement
-        };
-        // Body pose and motion subspace.
-        let (pose, mut s) = joint_motion(&joint.kind, &frame, &jq);
-        if model.has_body_frame_speeds(JointId(i)) {
-            // Body-frame speeds: translations along the body's own axes.
-            s[0] = Twist::translation_along(pose.transform_vector(Vec2::X));
-            s[1] = Twist::translation_along(pose.transform_vector(Vec2::Y));
-        }
-        let com = pose.transform_point(body.com);
-        joint_q[i] = jq;
-        joint_qdd[i] = jqdd;
-        joint_frame[i] = frame;
-        subspace[i] = s;
-        body_pose[i] = pose;
-        body_com[i] = com;
-        body_inertia[i] = Inertia::from_body(body.mass, com, body.inertia);
+        let place = place_joint(model, (i, joint, joint.kind), body, t, q, &parent);
+        joint_q[i] = place.q;
+        joint_qdd[i] = place.qdd;
+        joint_frame[i] = place.frame;
+        subspace[i] = place.subspace;
+        body_pose[i] = place.pose;
+        body_com[i] = place.com;
+        body_inertia[i] = place.inertia;
     }
     if !model.is_holonomic() {
         crate::constraints::update_map(model, data)?;
     }
     Ok(())
+}
+
+/// What [`update_positions`] computes for one joint and its body.
+#[derive(Clone, Copy)]
+pub(crate) struct JointPlacement {
+    /// The joint coordinates (the drive's at `t` for a prescribed joint).
+    pub q: [Real; 3],
+    /// The prescribed accelerations (zero for a free joint).
+    pub qdd: [Real; 3],
+    /// The joint frame in the world.
+    pub frame: Pose,
+    /// The motion subspace columns (world, referred to `O`).
+    pub subspace: [Twist; 3],
+    /// The body pose.
+    pub pose: Pose,
+    /// The centre of mass (m, world).
+    pub com: Vec2,
+    /// The spatial inertia (world, referred to `O`).
+    pub inertia: Inertia,
+}
+
+/// The positions of joint `i` (`joint`, of kind `kind` = `joint.kind`, carrying `body`) at
+/// `(t, q)` below its parent's pose `parent` (the identity for a root): one step of
+/// [`update_positions`], shared with the fused pass of
+/// [`crate::dynamics::forward_dynamics_with`] so that both compute the same numbers. The
+/// kind is passed by value so that a caller that knows it gets the code of that kind alone.
+#[inline(always)]
+pub(crate) fn place_joint(
+    model: &Model,
+    (i, joint, kind): (usize, &Joint, JointKind),
+    body: &Body,
+    t: Real,
+    q: &[Real],
+    parent: &Pose,
+) -> JointPlacement {
+    // Joint coordinates: from the drive, from q, or none.
+    let mut jq = [0.0; 3];
+    let mut jqdd = [0.0; 3];
+    match (&joint.drive, model.q_index(JointId(i))) {
+        (Some(drive), _) => {
+            jq[0] = drive.position(t);
+            jqdd[0] = drive.acceleration(t);
+        }
+        (None, Some(s)) => copy_dofs(&mut jq, q, s, kind.ndof()),
+        (None, None) => {}
+    }
+    // Joint frame in the world.
+    let frame = if kind.is_absolute() {
+        Pose::from_parts(
+            parent.transform_point(joint.placement.translation),
+            joint.placement.rotation,
+        )
+    } else {
+        *parent * joint.placement
+    };
+    // Body pose and motion subspace.
+    let (pose, mut s) = joint_motion(&kind, &frame, &jq);
+    if model.has_body_frame_speeds(JointId(i)) {
+        // Body-frame speeds: translations along the body's own axes.
+        s[0] = Twist::translation_along(pose.transform_vector(Vec2::X));
+        s[1] = Twist::translation_along(pose.transform_vector(Vec2::Y));
+    }
+    let com = pose.transform_point(body.com);
+    JointPlacement {
+        q: jq,
+        qdd: jqdd,
+        frame,
+        subspace: s,
+        pose,
+        com,
+        inertia: Inertia::from_body(body.mass, com, body.inertia),
+    }
 }
 
 /// `dst[..nd] = src[s..s + nd]` for the `nd ≤ 3` coordinates (or rates) of one joint,
@@ -215,9 +260,10 @@ fn copy_dofs(dst: &mut [Real; 3], src: &[Real], s: usize, nd: usize) {
 
 /// The body pose `frame · motion(q)` and the motion subspace columns (world, referred to
 /// `O`) of a joint with world frame `frame` at joint coordinates `q`.
+#[inline(always)]
 fn joint_motion(kind: &JointKind, frame: &Pose, q: &[Real; 3]) -> (Pose, [Twist; 3]) {
-    let e1 = frame.transform_vector(Vec2::X);
-    let e2 = frame.transform_vector(Vec2::Y);
+    let e1 = || frame.transform_vector(Vec2::X);
+    let e2 = || frame.transform_vector(Vec2::Y);
     match *kind {
         JointKind::Revolute { .. } => (
             *frame * Pose::rotation(q[0]),
@@ -238,8 +284,8 @@ fn joint_motion(kind: &JointKind, frame: &Pose, q: &[Real; 3]) -> (Pose, [Twist;
         JointKind::Translation => (
             *frame * Pose::translation(q[0], q[1]),
             [
-                Twist::translation_along(e1),
-                Twist::translation_along(e2),
+                Twist::translation_along(e1()),
+                Twist::translation_along(e2()),
                 Twist::ZERO,
             ],
         ),
@@ -248,8 +294,8 @@ fn joint_motion(kind: &JointKind, frame: &Pose, q: &[Real; 3]) -> (Pose, [Twist;
             (
                 pose,
                 [
-                    Twist::translation_along(e1),
-                    Twist::translation_along(e2),
+                    Twist::translation_along(e1()),
+                    Twist::translation_along(e2()),
                     Twist::rotation_about(pose.translation),
                 ],
             )
@@ -293,68 +339,114 @@ pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
     let body_twist_remainder = &mut data.body_twist_remainder[..n];
     let body_accel_vp = &mut data.body_accel_vp[..n];
     for (i, joint) in joints.iter().enumerate() {
-        // Joint rates.
-        let nd = joint.kind.ndof();
-        let mut qd = [0.0; 3];
-        let prescribed = joint.drive.is_some();
-        match (&joint.drive, model.q_index(JointId(i))) {
-            (Some(drive), _) => qd[0] = drive.velocity(t),
-            (None, Some(s)) => copy_dofs(&mut qd, u, s, nd),
-            (None, None) => {}
-        }
-        // What the parent carries: all of its twist, or only the velocity of `a`.
+        // What the parent carries.
         let (vp, vp_rem) = match joint.parent {
             Some(p) => (body_twist[p.index()], body_twist_remainder[p.index()]),
             None => (Twist::ZERO, Twist::ZERO),
         };
-        let a = joint_frame[i].translation;
-        let a_dot = vp.velocity_at(a);
-        let (mut v, mut v_rem, mut c) = if joint.is_absolute() {
-            // Ṗ V_parent = (0, ω_parent perp(ȧ)).
+        let m = move_joint(
+            model,
+            (i, joint, joint.kind),
+            t,
+            u,
+            (vp, vp_rem),
             (
-                vp.projected_at(a),
-                vp_rem.projected_at(a),
-                Twist::new(0.0, perp(a_dot) * vp.w),
-            )
-        } else {
-            (vp, vp_rem, Twist::ZERO)
-        };
-        // Joint motion: V += S q̇ (and the remainder, for a prescribed joint).
-        let s = &subspace[i];
+                joint_frame[i].translation,
+                &subspace[i],
+                body_pose[i].translation,
+            ),
+        );
+        joint_qd[i] = m.qd;
+        body_twist[i] = m.twist;
+        body_twist_remainder[i] = m.remainder;
+        body_accel_vp[i] = m.accel_vp;
+    }
+}
+
+/// What [`update_velocities`] computes for one joint and its body.
+#[derive(Clone, Copy)]
+pub(crate) struct JointMotion {
+    /// The joint rates (the drive's at `t` for a prescribed joint).
+    pub qd: [Real; 3],
+    /// The body twist `V_b`.
+    pub twist: Twist,
+    /// Its remainder part, due to the prescribed motions alone.
+    pub remainder: Twist,
+    /// The velocity-product acceleration `c_b`.
+    pub accel_vp: Twist,
+}
+
+/// The velocities of joint `i` (`joint`, of kind `kind` = `joint.kind`) at the speeds `u`
+/// and time `t`: the body twist
+/// from the parent's twist and remainder `(vp, vp_rem)` (zero for a root), with `a` the
+/// joint frame's origin, `s` the motion subspace and `o` the body origin (see the
+/// [module documentation](self) for the recursion). One step of [`tree_velocities`],
+/// shared with the fused pass of [`crate::dynamics::forward_dynamics_with`].
+#[inline(always)]
+pub(crate) fn move_joint(
+    model: &Model,
+    (i, joint, kind): (usize, &Joint, JointKind),
+    t: Real,
+    u: &[Real],
+    (vp, vp_rem): (Twist, Twist),
+    (a, s, o): (Vec2, &[Twist; 3], Vec2),
+) -> JointMotion {
+    // Joint rates.
+    let nd = kind.ndof();
+    let mut qd = [0.0; 3];
+    let prescribed = joint.drive.is_some();
+    match (&joint.drive, model.q_index(JointId(i))) {
+        (Some(drive), _) => qd[0] = drive.velocity(t),
+        (None, Some(s)) => copy_dofs(&mut qd, u, s, nd),
+        (None, None) => {}
+    }
+    // What the parent carries: all of its twist, or only the velocity of `a`.
+    let a_dot = vp.velocity_at(a);
+    let (mut v, mut v_rem, mut c) = if kind.is_absolute() {
+        // Ṗ V_parent = (0, ω_parent perp(ȧ)).
+        (
+            vp.projected_at(a),
+            vp_rem.projected_at(a),
+            Twist::new(0.0, perp(a_dot) * vp.w),
+        )
+    } else {
+        (vp, vp_rem, Twist::ZERO)
+    };
+    // Joint motion: V += S q̇ (and the remainder, for a prescribed joint).
+    for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
+        v += *s_k * *qd_k;
+    }
+    if prescribed {
         for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
-            v += *s_k * *qd_k;
+            v_rem += *s_k * *qd_k;
         }
-        if prescribed {
+    }
+    // c += Ṡ q̇.
+    match kind {
+        JointKind::Revolute { .. } => c += Twist::new(0.0, -perp(a_dot)) * qd[0],
+        JointKind::Prismatic { .. } | JointKind::Translation => {
             for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
-                v_rem += *s_k * *qd_k;
+                c += vp.cross_motion(s_k) * *qd_k;
             }
         }
-        // c += Ṡ q̇.
-        match joint.kind {
-            JointKind::Revolute { .. } => c += Twist::new(0.0, -perp(a_dot)) * qd[0],
-            JointKind::Prismatic { .. } | JointKind::Translation => {
-                for (s_k, qd_k) in s.iter().zip(&qd).take(nd) {
-                    c += vp.cross_motion(s_k) * *qd_k;
-                }
-            }
-            JointKind::Planar => {
-                // Joint-frame axes turn with the parent, body-frame axes with the body.
-                let turns = if model.has_body_frame_speeds(JointId(i)) {
-                    v
-                } else {
-                    vp
-                };
-                let o = body_pose[i].translation;
-                c += turns.cross_motion(&s[0]) * qd[0];
-                c += turns.cross_motion(&s[1]) * qd[1];
-                c += Twist::new(0.0, -perp(v.velocity_at(o))) * qd[2];
-            }
-            JointKind::Fixed => {}
+        JointKind::Planar => {
+            // Joint-frame axes turn with the parent, body-frame axes with the body.
+            let turns = if model.has_body_frame_speeds(JointId(i)) {
+                v
+            } else {
+                vp
+            };
+            c += turns.cross_motion(&s[0]) * qd[0];
+            c += turns.cross_motion(&s[1]) * qd[1];
+            c += Twist::new(0.0, -perp(v.velocity_at(o))) * qd[2];
         }
-        joint_qd[i] = qd;
-        body_twist[i] = v;
-        body_twist_remainder[i] = v_rem;
-        body_accel_vp[i] = c;
+        JointKind::Fixed => {}
+    }
+    JointMotion {
+        qd,
+        twist: v,
+        remainder: v_rem,
+        accel_vp: c,
     }
 }
 

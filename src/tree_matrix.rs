@@ -129,6 +129,7 @@ impl TreeMatrix {
     }
 
     /// Gives the matrix its storage (zeros), if it has none.
+    #[inline]
     pub fn allocate(&mut self) {
         if self.values.len() != self.pattern.entries() {
             self.values = vec![0.0; self.pattern.entries()];
@@ -190,6 +191,7 @@ impl TreeMatrix {
 
     /// Row `i`'s stored entries: `(i, i)`, `(i, λ(i))`, `(i, λ(λ(i)))`, … (empty if not
     /// allocated).
+    #[inline]
     pub fn row(&self, i: usize) -> &[Real] {
         self.values
             .get(self.pattern.start[i]..self.pattern.start[i + 1])
@@ -197,6 +199,7 @@ impl TreeMatrix {
     }
 
     /// Row `i`'s stored entries, mutable (see [`Self::row`]).
+    #[inline]
     pub fn row_mut(&mut self, i: usize) -> &mut [Real] {
         let range = self.pattern.start[i]..self.pattern.start[i + 1];
         self.values.get_mut(range).unwrap_or(&mut [])

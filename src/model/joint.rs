@@ -46,6 +46,7 @@ pub enum JointKind {
 
 impl JointKind {
     /// The number of joint coordinates (0 to 3).
+    #[inline]
     pub fn ndof(&self) -> usize {
         match self {
             JointKind::Revolute { .. } | JointKind::Prismatic { .. } => 1,
@@ -53,6 +54,12 @@ impl JointKind {
             JointKind::Planar => 3,
             JointKind::Fixed => 0,
         }
+    }
+
+    /// `true` for a revolute joint whose angle is measured from the world.
+    #[inline]
+    pub fn is_absolute(&self) -> bool {
+        matches!(self, JointKind::Revolute { absolute: true })
     }
 
     /// The suffixes of the coordinate names (`"<joint>.<suffix>"`).
@@ -299,6 +306,6 @@ impl Joint {
     /// `true` for a revolute joint whose angle is measured from the world.
     #[inline]
     pub fn is_absolute(&self) -> bool {
-        matches!(self.kind, JointKind::Revolute { absolute: true })
+        self.kind.is_absolute()
     }
 }
