@@ -173,8 +173,14 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// `g(t)` into `scratch.g` at an interior sample of the step: stand-ins allowed (see
     /// [`EventFunctions::interior_values`]).
     fn interior_values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
-        self.state_at(t);
         self.counters.value_evals += 1;
+        let stateless = (self.funcs)
+            .interior_values_without_state(t, &mut self.s.g)
+            .map_err(|source| EventError::Function { t, source })?;
+        if stateless {
+            return Ok(());
+        }
+        self.state_at(t);
         self.funcs
             .interior_values(t, &self.s.y, &mut self.s.g)
             .map_err(|source| EventError::Function { t, source })
@@ -239,6 +245,13 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// [`interior_values`](Self::interior_values) at the same `t`: the caller's
     /// [`EventFunctions::interior_rates`] (stand-ins allowed), else the difference.
     fn interior_rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+        let stateless = (self.funcs)
+            .interior_rates_without_state(t, &mut self.s.gd)
+            .map_err(|source| EventError::Function { t, source })?;
+        if stateless {
+            self.counters.rate_evals += 1;
+            return Ok(());
+        }
         self.derivative_at(t);
         let given = self
             .funcs

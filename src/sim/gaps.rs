@@ -238,6 +238,9 @@ struct StandIns {
     /// The time of the last interior sample that computed nothing (NaN: none), for its
     /// rates.
     nothing_at: Real,
+    /// The values of the interior samples that compute nothing, once the first of the
+    /// step wrote them (empty: not yet).
+    nothing: Vec<Real>,
     /// Whether an interior sample of this step used them.
     used: bool,
     /// Whether an interior sample of this step used the gaps' stand-ins.
@@ -382,6 +385,7 @@ impl<'m> GapFunctions<'m> {
         let k = closed.len();
         (self.here.closed).reserve(k.saturating_sub(self.here.closed.len()));
         self.persistent.set(closed, mu);
+        self.stand_ins.nothing.clear();
         self.end.fit(k, self.model.nq() + self.model.nu());
     }
 
@@ -411,6 +415,7 @@ impl<'m> GapFunctions<'m> {
         s.v0.resize(self.candidates.len(), Real::NAN);
         s.gap.clear();
         s.nothing_at = Real::NAN;
+        s.nothing.clear();
         s.checked_at = Real::NAN;
         s.used = false;
         s.gaps_used = false;
@@ -455,6 +460,7 @@ impl<'m> GapFunctions<'m> {
         let s = &mut self.stand_ins;
         s.v0.reserve(pairs.saturating_sub(s.v0.len()));
         s.gap.reserve(pairs.saturating_sub(s.gap.len()));
+        (s.nothing).reserve((SLOTS * pairs).saturating_sub(s.nothing.len()));
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -477,6 +483,7 @@ impl<'m> GapFunctions<'m> {
             }
         }
         if self.candidates.len() > before {
+            self.stand_ins.nothing.clear();
             self.candidates.sort_unstable();
             self.candidates.dedup();
         }
@@ -722,20 +729,27 @@ impl GapFunctions<'_> {
     /// The values at an interior sample where every function has a stand-in (see
     /// [`StandIns`]): nothing computed.
     fn values_of_nothing(&mut self, t: Real, g: &mut [Real]) {
-        g.fill(self.scales.length);
         let s = &mut self.stand_ins;
-        for (r, &(g0, _)) in s.gap.iter().enumerate() {
-            if g0.is_finite() {
-                g[SLOTS * r] = g0;
-            }
-        }
         let closed = self.persistent.closed();
-        for (i, c) in closed.iter().enumerate() {
-            let j = rank(&self.persistent, i);
-            let at = SLOTS * self.candidates.binary_search(&c.pair).unwrap_or(0);
-            for (f, &l) in s.lo[i].iter().enumerate() {
-                g[at + 1 + f + 3 * j] = l;
+        if s.nothing.len() == g.len() {
+            // The same stand-ins at every interior sample of the step: written once.
+            g.copy_from_slice(&s.nothing);
+        } else {
+            g.fill(self.scales.length);
+            for (r, &(g0, _)) in s.gap.iter().enumerate() {
+                if g0.is_finite() {
+                    g[SLOTS * r] = g0;
+                }
             }
+            for (i, c) in closed.iter().enumerate() {
+                let j = rank(&self.persistent, i);
+                let at = SLOTS * self.candidates.binary_search(&c.pair).unwrap_or(0);
+                for (f, &l) in s.lo[i].iter().enumerate() {
+                    g[at + 1 + f + 3 * j] = l;
+                }
+            }
+            s.nothing.clear();
+            s.nothing.extend_from_slice(g);
         }
         if !closed.is_empty() {
             s.used = true;
@@ -947,6 +961,28 @@ impl EventFunctions for GapFunctions<'_> {
         let contact = self.gap_contact(self.candidates[i / SLOTS], t)?;
         self.gap_rate(self.candidates[i / SLOTS], contact, t)
             .map(Some)
+    }
+
+    /// The values of [`Self::values_of_nothing`] when every function has a stand-in (no
+    /// state needed), the same as [`EventFunctions::interior_values`] gives them.
+    fn interior_values_without_state(&mut self, t: Real, g: &mut [Real]) -> Result<bool, Nested> {
+        if self.interior() != Interior::Nothing {
+            return Ok(false);
+        }
+        if !self.persistent.closed().is_empty() {
+            self.stand_ins.counts.samples += 1;
+        }
+        self.values_of_nothing(t, g);
+        Ok(true)
+    }
+
+    /// Zero rates after [`Self::interior_values_without_state`] at `t`.
+    fn interior_rates_without_state(&mut self, t: Real, g_dot: &mut [Real]) -> Result<bool, Nested> {
+        if t != self.stand_ins.nothing_at {
+            return Ok(false);
+        }
+        g_dot.fill(0.0);
+        Ok(true)
     }
 
     fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
