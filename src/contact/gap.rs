@@ -7,7 +7,7 @@ use parry2d_f64::shape::{Shape, SupportMap};
 
 use crate::kinematics::{KinematicsError, collider_pose};
 use crate::math::{Pose, Real, Vec2};
-use crate::model::{Model, PairId};
+use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// A gap that cannot be computed.
@@ -86,6 +86,16 @@ pub fn pair_contact(
     let p = model
         .pair(pair)
         .ok_or(ContactError::UnknownPair { pair: pair.index() })?;
+    pair_contact_of(model, data, &p, prediction)
+}
+
+/// [`pair_contact`] of the pair `p` (`model.pair(id)`, looked up by the caller).
+pub fn pair_contact_of(
+    model: &Model,
+    data: &Data,
+    p: &ContactPair,
+    prediction: Real,
+) -> Result<Option<PairContact>, ContactError> {
     let (ca, cb) = (
         &model.colliders()[p.a.index()],
         &model.colliders()[p.b.index()],
@@ -97,9 +107,23 @@ pub fn pair_contact(
     // half-space is expected (`contact_support_map_halfspace` forgets `pos12.inverse()`),
     // so the distance is wrong; `query::contact(half-space, shape)` is right. Query with
     // the half-space first and swap the result back.
-    let halfspace_b = cb.shape.as_halfspace().is_some();
+    let halfspace = cb.shape.as_halfspace();
+    let halfspace_b = halfspace.is_some();
     let query_ab = || kept::contact(&pose_a, &*ca.shape.0, &pose_b, &*cb.shape.0, prediction);
-    let query_ba = || kept::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction);
+    let query_ba = || match (halfspace, ca.shape.as_support_map()) {
+        // What `kept::contact` and parry's dispatcher call for a half-space and a shape
+        // with a support map (neither a ball pair nor two support maps), called directly:
+        // the same function on the same arguments, without the shape-type tests.
+        (Some(h), Some(s)) => {
+            let pos12 = pose_b.inv_mul(&pose_a);
+            let mut c = query::details::contact_halfspace_support_map(&pos12, h, s, prediction);
+            if let Some(c) = &mut c {
+                c.transform_by_mut(&pose_b, &pose_a);
+            }
+            Ok(c)
+        }
+        _ => kept::contact(&pose_b, &*cb.shape.0, &pose_a, &*ca.shape.0, prediction),
+    };
     let (mut result, mut swapped) = if halfspace_b {
         (query_ba(), true)
     } else {

@@ -3,12 +3,12 @@
 
 use super::persistent::{Evaluation, Hold, Persistent, PointScratch, nearest_velocities};
 use super::{AtTime, Nested, Scales};
-use crate::contact::{PairContact, pair_contact};
+use crate::contact::{PairContact, pair_contact, pair_contact_of};
 use crate::dynamics::forward_dynamics;
 use crate::events::EventFunctions;
 use crate::kinematics::{point_velocity, update_positions, update_velocities};
 use crate::math::{Real, Vec2};
-use crate::model::{Model, PairId};
+use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// Event functions per contact pair.
@@ -72,6 +72,8 @@ pub struct GapFunctions<'m> {
     /// The kinematics of the step's end from the right-hand side (see
     /// [`Self::take_end_kinematics`]).
     end_kinematics: EndKinematics,
+    /// The last pair [`Self::gap_contact`] looked up, with its id.
+    last_pair: Option<(PairId, ContactPair)>,
 }
 
 /// The kinematics of the step's end, copied from the right-hand side's scratch, whose last
@@ -319,6 +321,7 @@ impl<'m> GapFunctions<'m> {
                 qu: vec![0.0; model.nq() + model.nu()],
                 data: Data::for_kinematics(model),
             },
+            last_pair: None,
         }
     }
 
@@ -548,8 +551,25 @@ impl GapFunctions<'_> {
         let mut on_pair = (closed.iter().enumerate()).filter(|(_, c)| c.pair == pair);
         let (first, second) = (on_pair.next().map(|(i, _)| i), on_pair.next());
         match (first, second) {
-            (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
-                .map_err(|e| Nested::from(e.at(t))),
+            (None, _) => {
+                // The pair looked up once while it stays the same (the model does not
+                // change): `pair_contact` without its lookup, the same numbers.
+                let p = match self.last_pair {
+                    Some((id, p)) if id == pair => p,
+                    _ => match model.pair(pair) {
+                        Some(p) => {
+                            self.last_pair = Some((pair, p));
+                            p
+                        }
+                        None => {
+                            return pair_contact(model, &self.data, pair, Real::INFINITY)
+                                .map_err(|e| Nested::from(e.at(t)));
+                        }
+                    },
+                };
+                pair_contact_of(model, &self.data, &p, Real::INFINITY)
+                    .map_err(|e| Nested::from(e.at(t)))
+            }
             (Some(i), None) => self.other_point(i),
             (Some(_), Some(_)) => Ok(None),
         }
@@ -977,7 +997,11 @@ impl EventFunctions for GapFunctions<'_> {
     }
 
     /// Zero rates after [`Self::interior_values_without_state`] at `t`.
-    fn interior_rates_without_state(&mut self, t: Real, g_dot: &mut [Real]) -> Result<bool, Nested> {
+    fn interior_rates_without_state(
+        &mut self,
+        t: Real,
+        g_dot: &mut [Real],
+    ) -> Result<bool, Nested> {
         if t != self.stand_ins.nothing_at {
             return Ok(false);
         }

@@ -649,7 +649,8 @@ impl Persistent {
         // b = c + J u̇_free, each row summed over the speeds in order, as the general case.
         let (b, c) = (self.b.as_mut_slice(), self.c.as_slice());
         let (mut b_n, mut b_t) = (c[0], c[1]);
-        for ((&ud, &jn), &jt) in data.udot.iter().zip(&self.eval.j_n).zip(&self.eval.j_t) {
+        let udot = data.udot.as_slice();
+        for ((&ud, &jn), &jt) in udot.iter().zip(&self.eval.j_n).zip(&self.eval.j_t) {
             b_n += jn * ud;
             b_t += jt * ud;
         }
@@ -726,7 +727,7 @@ impl Persistent {
         (data.mass_factor)
             .solve_factor_transpose_in_place(&mut self.column)
             .map_err(|e| e.at(t))?;
-        for (a, d) in data.udot.iter_mut().zip(&self.column) {
+        for (a, d) in data.udot.as_mut_slice().iter_mut().zip(&self.column) {
             *a += d;
         }
         for i in 0..self.closed.len() {
