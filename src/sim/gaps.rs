@@ -47,7 +47,8 @@ pub fn rank(persistent: &Persistent, i: usize) -> usize {
 /// The event functions `gᵢ(t, y)` of a model: see [`slot`].
 pub struct GapFunctions<'m> {
     model: &'m Model,
-    data: Data,
+    /// Boxed, to trade places with `end_kinematics.data` by a pointer swap.
+    data: Box<Data>,
     /// The closed contact points, in sync with the ODE system's.
     pub persistent: Persistent,
     scratch: PointScratch,
@@ -85,7 +86,7 @@ struct EndKinematics {
     t: Real,
     /// `[q; u]`.
     qu: Vec<Real>,
-    data: Data,
+    data: Box<Data>,
 }
 
 /// The state whose kinematics `GapFunctions::data` holds after the values of a sample, with
@@ -285,16 +286,24 @@ impl Memo {
             && self.closed == fns.persistent.closed()
     }
 
-    fn keep(&mut self, fns: &GapFunctions<'_>, t: Real, y: &[Real], g: &[Real]) {
+    /// Keeps `g` at `(t, y)` with the candidates, disarmed pairs and closed points of the
+    /// functions.
+    fn keep(
+        &mut self,
+        (t, y, g): (Real, &[Real], &[Real]),
+        candidates: &[PairId],
+        disarmed: &[(PairId, Real)],
+        closed: &[super::persistent::Closed],
+    ) {
         self.t = t;
         self.y.clear();
         self.y.extend_from_slice(y);
         self.candidates.clear();
-        self.candidates.extend_from_slice(&fns.candidates);
+        self.candidates.extend_from_slice(candidates);
         self.disarmed.clear();
-        self.disarmed.extend_from_slice(&fns.disarmed);
+        self.disarmed.extend_from_slice(disarmed);
         self.closed.clear();
-        self.closed.extend_from_slice(fns.persistent.closed());
+        self.closed.extend_from_slice(closed);
         self.g.clear();
         self.g.extend_from_slice(g);
     }
@@ -305,7 +314,7 @@ impl<'m> GapFunctions<'m> {
     pub fn new(model: &'m Model, scales: Scales) -> Self {
         Self {
             model,
-            data: Data::new(model),
+            data: Box::new(Data::new(model)),
             persistent: Persistent::new(model, scales),
             scratch: PointScratch::new(model),
             scales,
@@ -319,7 +328,7 @@ impl<'m> GapFunctions<'m> {
                 valid: false,
                 t: Real::NAN,
                 qu: vec![0.0; model.nq() + model.nu()],
-                data: Data::for_kinematics(model),
+                data: Box::new(Data::new(model)),
             },
             last_pair: None,
         }
@@ -352,8 +361,8 @@ impl<'m> GapFunctions<'m> {
         !self.stand_ins.off
     }
 
-    /// Copies the kinematics taken by [`Self::take_end_kinematics`] into `self.data` if they
-    /// are those of `(t, q, u)`; whether it did.
+    /// Moves the kinematics taken by [`Self::take_end_kinematics`] into `self.data` if they
+    /// are those of `(t, q, u)` (once: a second call computes them); whether it did.
     fn end_kinematics_at(&mut self, t: Real, q: &[Real], u: &[Real]) -> bool {
         let end = &self.end_kinematics;
         let n = q.len();
@@ -363,7 +372,11 @@ impl<'m> GapFunctions<'m> {
             && end.qu[..n] == *q
             && end.qu[n..] == *u;
         if at {
-            self.data.copy_kinematics_from(&end.data);
+            // Taken, not copied: `data` and the taken scratch trade places (both full
+            // scratches of the model; every other consumer of `data` computes what it
+            // reads), and what was taken is spent.
+            std::mem::swap(&mut self.data, &mut self.end_kinematics.data);
+            self.end_kinematics.valid = false;
         }
         at
     }
@@ -928,9 +941,12 @@ impl EventFunctions for GapFunctions<'_> {
             }
             self.speeds_at(t);
         }
-        let mut memo = std::mem::take(&mut self.memo);
-        memo.keep(self, t, y, g);
-        self.memo = memo;
+        (self.memo).keep(
+            (t, y, g),
+            &self.candidates,
+            &self.disarmed,
+            self.persistent.closed(),
+        );
         Ok(())
     }
 
