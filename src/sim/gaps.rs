@@ -73,8 +73,8 @@ pub struct GapFunctions<'m> {
     /// The kinematics of the step's end from the right-hand side (see
     /// [`Self::take_end_kinematics`]).
     end_kinematics: EndKinematics,
-    /// The last pair [`Self::gap_contact`] looked up, with its id.
-    last_pair: Option<(PairId, ContactPair)>,
+    /// The last pair looked up, with its id ([`Self::pair`]).
+    last_pair: std::cell::Cell<Option<(PairId, ContactPair)>>,
 }
 
 /// The kinematics of the step's end, copied from the right-hand side's scratch, whose last
@@ -330,7 +330,7 @@ impl<'m> GapFunctions<'m> {
                 qu: vec![0.0; model.nq() + model.nu()],
                 data: Box::new(Data::new(model)),
             },
-            last_pair: None,
+            last_pair: std::cell::Cell::new(None),
         }
     }
 
@@ -548,6 +548,25 @@ impl GapFunctions<'_> {
         })
     }
 
+    /// `model.pair(pair)`, looked up once while the pair asked for stays the same (the
+    /// model does not change; the contact of a candidate, its rate and its speed bound ask
+    /// for the same pair in turn).
+    fn pair(&self, pair: PairId) -> Option<ContactPair> {
+        match self.last_pair.get() {
+            Some((id, p)) if id == pair => Some(p),
+            _ => {
+                let p = self.model.pair(pair)?;
+                self.last_pair.set(Some((pair, p)));
+                Some(p)
+            }
+        }
+    }
+
+    /// `model.pair_of(pair)` ([`Self::pair`] when the model has the pair, the same pair).
+    fn pair_of(&self, pair: PairId) -> ContactPair {
+        self.pair(pair).unwrap_or_else(|| self.model.pair_of(pair))
+    }
+
     /// [`Self::open_gap`] at the positions of `self.data`.
     fn open_gap_here(&mut self, pair: PairId, t: Real) -> Result<Real, Nested> {
         Ok(self
@@ -564,25 +583,13 @@ impl GapFunctions<'_> {
         let mut on_pair = (closed.iter().enumerate()).filter(|(_, c)| c.pair == pair);
         let (first, second) = (on_pair.next().map(|(i, _)| i), on_pair.next());
         match (first, second) {
-            (None, _) => {
-                // The pair looked up once while it stays the same (the model does not
-                // change): `pair_contact` without its lookup, the same numbers.
-                let p = match self.last_pair {
-                    Some((id, p)) if id == pair => p,
-                    _ => match model.pair(pair) {
-                        Some(p) => {
-                            self.last_pair = Some((pair, p));
-                            p
-                        }
-                        None => {
-                            return pair_contact(model, &self.data, pair, Real::INFINITY)
-                                .map_err(|e| Nested::from(e.at(t)));
-                        }
-                    },
-                };
-                pair_contact_of(model, &self.data, &p, Real::INFINITY)
-                    .map_err(|e| Nested::from(e.at(t)))
-            }
+            (None, _) => match self.pair(pair) {
+                // `pair_contact` without its lookup: the same numbers.
+                Some(p) => pair_contact_of(model, &self.data, &p, Real::INFINITY)
+                    .map_err(|e| Nested::from(e.at(t))),
+                None => pair_contact(model, &self.data, pair, Real::INFINITY)
+                    .map_err(|e| Nested::from(e.at(t))),
+            },
             (Some(i), None) => self.other_point(i),
             (Some(_), Some(_)) => Ok(None),
         }
@@ -820,7 +827,7 @@ impl GapFunctions<'_> {
                         .map(|r| &self.here.candidate_points[r])
                         .filter(|points| !points.is_empty());
                     let v = if let Some(points) = points {
-                        let p = model.pair_of(c.pair);
+                        let p = self.pair_of(c.pair);
                         nearest_velocities(model, &self.data, &p, points, c.local)?
                     } else {
                         self.scratch.velocities(
@@ -853,7 +860,7 @@ impl GapFunctions<'_> {
     /// The speed bound `V_a + V_b` of the points of `pair` (`broad::reach`), at the
     /// positions and velocities of `self.data`.
     fn pair_speed(&self, pair: PairId) -> Real {
-        let p = self.model.pair_of(pair);
+        let p = self.pair_of(pair);
         let reach = |c| super::broad::reach(self.model, &self.data, c).0;
         reach(p.a) + reach(p.b)
     }
@@ -1116,7 +1123,7 @@ impl GapFunctions<'_> {
         let model = self.model;
         Ok(match contact {
             Some(c) => {
-                let p = model.pair_of(pair);
+                let p = self.pair_of(pair);
                 let v = |collider: crate::model::ColliderId, at: Vec2| match model.colliders()
                     [collider.index()]
                 .body
