@@ -540,8 +540,8 @@ impl GapFunctions<'_> {
         let p = self.persistent.closed_pair(model, &self.data, i)?;
         let candidates =
             (self.scratch).candidates_of(model, &self.data, (pair, &p), self.scales.length)?;
-        self.here.points = candidates.clone();
-        Ok(match candidates.as_slice() {
+        self.here.points = candidates;
+        Ok(match self.here.points.as_slice() {
             [x, y] if (x.1 - local).length() <= (y.1 - local).length() => Some(y.0),
             [x, _] => Some(x.0),
             _ => None,
