@@ -19,7 +19,7 @@ pub use frame::{
     ContactFrame, FrameWorkspace, Tangent, contact_frame, frame_at, frame_of, relative_velocity,
     relative_velocity_of,
 };
-pub use gap::{ContactError, PairContact, pair_contact, signed_gap};
+pub use gap::{ContactError, PairContact, pair_contact, pair_contact_of, signed_gap};
 pub use manifold::{
     ClosedVertex, ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points,
     contact_points_of, is_plane_pair,

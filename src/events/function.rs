@@ -28,6 +28,34 @@ pub trait EventFunctions {
         self.values(t, y, g)
     }
 
+    /// [`interior_values`](EventFunctions::interior_values) at `t` when every function
+    /// has a stand-in there, so that no state is needed: writes them into `g` and returns
+    /// `true` (the locator then skips the dense output at `t`, and asks
+    /// [`interior_rates_without_state`](EventFunctions::interior_rates_without_state) for
+    /// the rates). `false`, with nothing written, when a value needs the state. The
+    /// default: `false`.
+    fn interior_values_without_state(
+        &mut self,
+        _t: Real,
+        _g: &mut [Real],
+    ) -> Result<bool, Self::Error> {
+        Ok(false)
+    }
+
+    /// The rates after [`interior_values_without_state`] gave the values at `t` (every
+    /// function a stand-in; see [`interior_rates`](EventFunctions::interior_rates)):
+    /// written into `g_dot` with `true`, or `false`, with nothing written, when they need
+    /// the state. The default: `false`.
+    ///
+    /// [`interior_values_without_state`]: EventFunctions::interior_values_without_state
+    fn interior_rates_without_state(
+        &mut self,
+        _t: Real,
+        _g_dot: &mut [Real],
+    ) -> Result<bool, Self::Error> {
+        Ok(false)
+    }
+
     /// Writes `ġᵢ(t, y)` at an interior sample of a step's regular sampling, after
     /// [`interior_values`](EventFunctions::interior_values) at the same `t`, like
     /// [`rates`](EventFunctions::rates). A function that got a positive stand-in there

@@ -173,8 +173,14 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// `g(t)` into `scratch.g` at an interior sample of the step: stand-ins allowed (see
     /// [`EventFunctions::interior_values`]).
     fn interior_values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
-        self.state_at(t);
         self.counters.value_evals += 1;
+        let stateless = (self.funcs)
+            .interior_values_without_state(t, &mut self.s.g)
+            .map_err(|source| EventError::Function { t, source })?;
+        if stateless {
+            return Ok(());
+        }
+        self.state_at(t);
         self.funcs
             .interior_values(t, &self.s.y, &mut self.s.g)
             .map_err(|source| EventError::Function { t, source })
@@ -239,6 +245,13 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// [`interior_values`](Self::interior_values) at the same `t`: the caller's
     /// [`EventFunctions::interior_rates`] (stand-ins allowed), else the difference.
     fn interior_rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+        let stateless = (self.funcs)
+            .interior_rates_without_state(t, &mut self.s.gd)
+            .map_err(|source| EventError::Function { t, source })?;
+        if stateless {
+            self.counters.rate_evals += 1;
+            return Ok(());
+        }
         self.derivative_at(t);
         let given = self
             .funcs
@@ -440,12 +453,25 @@ impl EventLocator {
         let sim = self.settings.simultaneity;
         self.done.fill(false);
         let mut t_first = Real::INFINITY;
+        let extremum_search = self.settings.extremum_search;
         for j in 0..parts {
             if self.samples.ts[j] > t_first + sim {
                 break;
             }
+            // The samples at both ends of the interval, of every function.
+            let (ends, rates) = (&self.samples.gs, &self.samples.gds);
+            let (g_a, g_b) = (&ends[j * m..(j + 1) * m], &ends[(j + 1) * m..(j + 2) * m]);
+            let (gd_a, gd_b) = (&rates[j * m..(j + 1) * m], &rates[(j + 1) * m..(j + 2) * m]);
             for (i, &is_armed) in armed.iter().enumerate() {
                 if !is_armed || self.done[i] {
+                    continue;
+                }
+                // Positive at both ends and no minimum between them to search: `classify`
+                // has nothing to find (the common case, its tests in its order).
+                if g_a[i] > 0.0
+                    && g_b[i] > 0.0
+                    && !(extremum_search && gd_a[i] < 0.0 && gd_b[i] > 0.0)
+                {
                     continue;
                 }
                 if let Some(ev) = classify(&mut sp, &self.samples, &self.settings, m, i, j)? {
@@ -508,6 +534,10 @@ fn check_finite<E: std::error::Error + 'static>(
     armed: &[bool],
     t: Real,
 ) -> Result<(), EventError<E>> {
+    // Every value finite (unarmed ones too, as a rule): one pass without branches.
+    if v.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return Ok(());
+    }
     match v.iter().zip(armed).position(|(x, &a)| a && !x.is_finite()) {
         Some(index) => Err(EventError::NonFinite { t, index }),
         None => Ok(()),

@@ -3,12 +3,12 @@
 
 use super::persistent::{Evaluation, Hold, Persistent, PointScratch, nearest_velocities};
 use super::{AtTime, Nested, Scales};
-use crate::contact::{PairContact, pair_contact};
+use crate::contact::{PairContact, pair_contact, pair_contact_of};
 use crate::dynamics::forward_dynamics;
 use crate::events::EventFunctions;
 use crate::kinematics::{point_velocity, update_positions, update_velocities};
 use crate::math::{Real, Vec2};
-use crate::model::{Model, PairId};
+use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
 
 /// Event functions per contact pair.
@@ -47,7 +47,8 @@ pub fn rank(persistent: &Persistent, i: usize) -> usize {
 /// The event functions `gᵢ(t, y)` of a model: see [`slot`].
 pub struct GapFunctions<'m> {
     model: &'m Model,
-    data: Data,
+    /// Boxed, to trade places with `end_kinematics.data` by a pointer swap.
+    data: Box<Data>,
     /// The closed contact points, in sync with the ODE system's.
     pub persistent: Persistent,
     scratch: PointScratch,
@@ -72,6 +73,8 @@ pub struct GapFunctions<'m> {
     /// The kinematics of the step's end from the right-hand side (see
     /// [`Self::take_end_kinematics`]).
     end_kinematics: EndKinematics,
+    /// The last pair looked up, with its id ([`Self::pair`]).
+    last_pair: std::cell::Cell<Option<(PairId, ContactPair)>>,
 }
 
 /// The kinematics of the step's end, copied from the right-hand side's scratch, whose last
@@ -83,7 +86,7 @@ struct EndKinematics {
     t: Real,
     /// `[q; u]`.
     qu: Vec<Real>,
-    data: Data,
+    data: Box<Data>,
 }
 
 /// The state whose kinematics `GapFunctions::data` holds after the values of a sample, with
@@ -238,6 +241,9 @@ struct StandIns {
     /// The time of the last interior sample that computed nothing (NaN: none), for its
     /// rates.
     nothing_at: Real,
+    /// The values of the interior samples that compute nothing, once the first of the
+    /// step wrote them (empty: not yet).
+    nothing: Vec<Real>,
     /// Whether an interior sample of this step used them.
     used: bool,
     /// Whether an interior sample of this step used the gaps' stand-ins.
@@ -280,16 +286,24 @@ impl Memo {
             && self.closed == fns.persistent.closed()
     }
 
-    fn keep(&mut self, fns: &GapFunctions<'_>, t: Real, y: &[Real], g: &[Real]) {
+    /// Keeps `g` at `(t, y)` with the candidates, disarmed pairs and closed points of the
+    /// functions.
+    fn keep(
+        &mut self,
+        (t, y, g): (Real, &[Real], &[Real]),
+        candidates: &[PairId],
+        disarmed: &[(PairId, Real)],
+        closed: &[super::persistent::Closed],
+    ) {
         self.t = t;
         self.y.clear();
         self.y.extend_from_slice(y);
         self.candidates.clear();
-        self.candidates.extend_from_slice(&fns.candidates);
+        self.candidates.extend_from_slice(candidates);
         self.disarmed.clear();
-        self.disarmed.extend_from_slice(&fns.disarmed);
+        self.disarmed.extend_from_slice(disarmed);
         self.closed.clear();
-        self.closed.extend_from_slice(fns.persistent.closed());
+        self.closed.extend_from_slice(closed);
         self.g.clear();
         self.g.extend_from_slice(g);
     }
@@ -300,7 +314,7 @@ impl<'m> GapFunctions<'m> {
     pub fn new(model: &'m Model, scales: Scales) -> Self {
         Self {
             model,
-            data: Data::new(model),
+            data: Box::new(Data::new(model)),
             persistent: Persistent::new(model, scales),
             scratch: PointScratch::new(model),
             scales,
@@ -314,8 +328,9 @@ impl<'m> GapFunctions<'m> {
                 valid: false,
                 t: Real::NAN,
                 qu: vec![0.0; model.nq() + model.nu()],
-                data: Data::for_kinematics(model),
+                data: Box::new(Data::new(model)),
             },
+            last_pair: std::cell::Cell::new(None),
         }
     }
 
@@ -346,8 +361,8 @@ impl<'m> GapFunctions<'m> {
         !self.stand_ins.off
     }
 
-    /// Copies the kinematics taken by [`Self::take_end_kinematics`] into `self.data` if they
-    /// are those of `(t, q, u)`; whether it did.
+    /// Moves the kinematics taken by [`Self::take_end_kinematics`] into `self.data` if they
+    /// are those of `(t, q, u)` (once: a second call computes them); whether it did.
     fn end_kinematics_at(&mut self, t: Real, q: &[Real], u: &[Real]) -> bool {
         let end = &self.end_kinematics;
         let n = q.len();
@@ -357,7 +372,11 @@ impl<'m> GapFunctions<'m> {
             && end.qu[..n] == *q
             && end.qu[n..] == *u;
         if at {
-            self.data.copy_kinematics_from(&end.data);
+            // Taken, not copied: `data` and the taken scratch trade places (both full
+            // scratches of the model; every other consumer of `data` computes what it
+            // reads), and what was taken is spent.
+            std::mem::swap(&mut self.data, &mut self.end_kinematics.data);
+            self.end_kinematics.valid = false;
         }
         at
     }
@@ -382,6 +401,7 @@ impl<'m> GapFunctions<'m> {
         let k = closed.len();
         (self.here.closed).reserve(k.saturating_sub(self.here.closed.len()));
         self.persistent.set(closed, mu);
+        self.stand_ins.nothing.clear();
         self.end.fit(k, self.model.nq() + self.model.nu());
     }
 
@@ -411,6 +431,7 @@ impl<'m> GapFunctions<'m> {
         s.v0.resize(self.candidates.len(), Real::NAN);
         s.gap.clear();
         s.nothing_at = Real::NAN;
+        s.nothing.clear();
         s.checked_at = Real::NAN;
         s.used = false;
         s.gaps_used = false;
@@ -455,6 +476,7 @@ impl<'m> GapFunctions<'m> {
         let s = &mut self.stand_ins;
         s.v0.reserve(pairs.saturating_sub(s.v0.len()));
         s.gap.reserve(pairs.saturating_sub(s.gap.len()));
+        (s.nothing).reserve((SLOTS * pairs).saturating_sub(s.nothing.len()));
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -477,6 +499,7 @@ impl<'m> GapFunctions<'m> {
             }
         }
         if self.candidates.len() > before {
+            self.stand_ins.nothing.clear();
             self.candidates.sort_unstable();
             self.candidates.dedup();
         }
@@ -517,12 +540,31 @@ impl GapFunctions<'_> {
         let p = self.persistent.closed_pair(model, &self.data, i)?;
         let candidates =
             (self.scratch).candidates_of(model, &self.data, (pair, &p), self.scales.length)?;
-        self.here.points = candidates.clone();
-        Ok(match candidates.as_slice() {
+        self.here.points = candidates;
+        Ok(match self.here.points.as_slice() {
             [x, y] if (x.1 - local).length() <= (y.1 - local).length() => Some(y.0),
             [x, _] => Some(x.0),
             _ => None,
         })
+    }
+
+    /// `model.pair(pair)`, looked up once while the pair asked for stays the same (the
+    /// model does not change; the contact of a candidate, its rate and its speed bound ask
+    /// for the same pair in turn).
+    fn pair(&self, pair: PairId) -> Option<ContactPair> {
+        match self.last_pair.get() {
+            Some((id, p)) if id == pair => Some(p),
+            _ => {
+                let p = self.model.pair(pair)?;
+                self.last_pair.set(Some((pair, p)));
+                Some(p)
+            }
+        }
+    }
+
+    /// `model.pair_of(pair)` ([`Self::pair`] when the model has the pair, the same pair).
+    fn pair_of(&self, pair: PairId) -> ContactPair {
+        self.pair(pair).unwrap_or_else(|| self.model.pair_of(pair))
     }
 
     /// [`Self::open_gap`] at the positions of `self.data`.
@@ -541,8 +583,13 @@ impl GapFunctions<'_> {
         let mut on_pair = (closed.iter().enumerate()).filter(|(_, c)| c.pair == pair);
         let (first, second) = (on_pair.next().map(|(i, _)| i), on_pair.next());
         match (first, second) {
-            (None, _) => pair_contact(model, &self.data, pair, Real::INFINITY)
-                .map_err(|e| Nested::from(e.at(t))),
+            (None, _) => match self.pair(pair) {
+                // `pair_contact` without its lookup: the same numbers.
+                Some(p) => pair_contact_of(model, &self.data, &p, Real::INFINITY)
+                    .map_err(|e| Nested::from(e.at(t))),
+                None => pair_contact(model, &self.data, pair, Real::INFINITY)
+                    .map_err(|e| Nested::from(e.at(t))),
+            },
             (Some(i), None) => self.other_point(i),
             (Some(_), Some(_)) => Ok(None),
         }
@@ -722,20 +769,27 @@ impl GapFunctions<'_> {
     /// The values at an interior sample where every function has a stand-in (see
     /// [`StandIns`]): nothing computed.
     fn values_of_nothing(&mut self, t: Real, g: &mut [Real]) {
-        g.fill(self.scales.length);
         let s = &mut self.stand_ins;
-        for (r, &(g0, _)) in s.gap.iter().enumerate() {
-            if g0.is_finite() {
-                g[SLOTS * r] = g0;
-            }
-        }
         let closed = self.persistent.closed();
-        for (i, c) in closed.iter().enumerate() {
-            let j = rank(&self.persistent, i);
-            let at = SLOTS * self.candidates.binary_search(&c.pair).unwrap_or(0);
-            for (f, &l) in s.lo[i].iter().enumerate() {
-                g[at + 1 + f + 3 * j] = l;
+        if s.nothing.len() == g.len() {
+            // The same stand-ins at every interior sample of the step: written once.
+            g.copy_from_slice(&s.nothing);
+        } else {
+            g.fill(self.scales.length);
+            for (r, &(g0, _)) in s.gap.iter().enumerate() {
+                if g0.is_finite() {
+                    g[SLOTS * r] = g0;
+                }
             }
+            for (i, c) in closed.iter().enumerate() {
+                let j = rank(&self.persistent, i);
+                let at = SLOTS * self.candidates.binary_search(&c.pair).unwrap_or(0);
+                for (f, &l) in s.lo[i].iter().enumerate() {
+                    g[at + 1 + f + 3 * j] = l;
+                }
+            }
+            s.nothing.clear();
+            s.nothing.extend_from_slice(g);
         }
         if !closed.is_empty() {
             s.used = true;
@@ -773,7 +827,7 @@ impl GapFunctions<'_> {
                         .map(|r| &self.here.candidate_points[r])
                         .filter(|points| !points.is_empty());
                     let v = if let Some(points) = points {
-                        let p = model.pair_of(c.pair);
+                        let p = self.pair_of(c.pair);
                         nearest_velocities(model, &self.data, &p, points, c.local)?
                     } else {
                         self.scratch.velocities(
@@ -806,7 +860,7 @@ impl GapFunctions<'_> {
     /// The speed bound `V_a + V_b` of the points of `pair` (`broad::reach`), at the
     /// positions and velocities of `self.data`.
     fn pair_speed(&self, pair: PairId) -> Real {
-        let p = self.model.pair_of(pair);
+        let p = self.pair_of(pair);
         let reach = |c| super::broad::reach(self.model, &self.data, c).0;
         reach(p.a) + reach(p.b)
     }
@@ -894,9 +948,12 @@ impl EventFunctions for GapFunctions<'_> {
             }
             self.speeds_at(t);
         }
-        let mut memo = std::mem::take(&mut self.memo);
-        memo.keep(self, t, y, g);
-        self.memo = memo;
+        (self.memo).keep(
+            (t, y, g),
+            &self.candidates,
+            &self.disarmed,
+            self.persistent.closed(),
+        );
         Ok(())
     }
 
@@ -947,6 +1004,32 @@ impl EventFunctions for GapFunctions<'_> {
         let contact = self.gap_contact(self.candidates[i / SLOTS], t)?;
         self.gap_rate(self.candidates[i / SLOTS], contact, t)
             .map(Some)
+    }
+
+    /// The values of [`Self::values_of_nothing`] when every function has a stand-in (no
+    /// state needed), the same as [`EventFunctions::interior_values`] gives them.
+    fn interior_values_without_state(&mut self, t: Real, g: &mut [Real]) -> Result<bool, Nested> {
+        if self.interior() != Interior::Nothing {
+            return Ok(false);
+        }
+        if !self.persistent.closed().is_empty() {
+            self.stand_ins.counts.samples += 1;
+        }
+        self.values_of_nothing(t, g);
+        Ok(true)
+    }
+
+    /// Zero rates after [`Self::interior_values_without_state`] at `t`.
+    fn interior_rates_without_state(
+        &mut self,
+        t: Real,
+        g_dot: &mut [Real],
+    ) -> Result<bool, Nested> {
+        if t != self.stand_ins.nothing_at {
+            return Ok(false);
+        }
+        g_dot.fill(0.0);
+        Ok(true)
     }
 
     fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
@@ -1040,7 +1123,7 @@ impl GapFunctions<'_> {
         let model = self.model;
         Ok(match contact {
             Some(c) => {
-                let p = model.pair_of(pair);
+                let p = self.pair_of(pair);
                 let v = |collider: crate::model::ColliderId, at: Vec2| match model.colliders()
                     [collider.index()]
                 .body

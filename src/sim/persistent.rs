@@ -347,10 +347,18 @@ impl Persistent {
     /// Looks up the pair of each closed point, and whether they are all vertices on
     /// half-spaces of the world (see `vertices`): once per set of closed points, not at
     /// every right-hand side. `data` gives the time of an error.
+    #[inline]
     fn resolve_pairs(&mut self, model: &Model, data: &Data) -> Result<(), SimError> {
         if self.resolved {
             return Ok(());
         }
+        self.resolve_pairs_now(model, data)
+    }
+
+    /// [`Self::resolve_pairs`] when they are not resolved yet: out of line, so that the
+    /// check at every right-hand side costs a comparison.
+    #[inline(never)]
+    fn resolve_pairs_now(&mut self, model: &Model, data: &Data) -> Result<(), SimError> {
         self.pairs.clear();
         for c in &self.closed {
             self.pairs.push(resolve(model, data, c.pair)?);
@@ -551,6 +559,15 @@ impl Persistent {
             let at = (pair, &self.pairs[i]);
             let vertex = self.closed_vertices[i];
             match (self.eval).point(model, data, at, (local, vertex), self.scales.length)? {
+                Some(p) if k == 1 => {
+                    // One point: `Jᵀ` is `[J_n J_t]`, the two columns of `Y` before their
+                    // solve; `J` itself is not stored (see below).
+                    let nu = self.column.len();
+                    let ys = self.y.as_mut_slice();
+                    ys[..nu].copy_from_slice(&self.eval.j_n);
+                    ys[nu..2 * nu].copy_from_slice(&self.eval.j_t);
+                    self.ev.points.push(p);
+                }
                 Some(p) => {
                     // Rows 2i, 2i + 1 of the column-major `J` (2k × nu).
                     let jac = self.jac.as_mut_slice();
@@ -568,6 +585,9 @@ impl Persistent {
             }
         }
         self.velocity_products(model, data, (t, q, u))?;
+        if k == 1 {
+            return self.assemble_one(data, t);
+        }
         // Y = F⁻¹ Jᵀ column by column, with the factor M = F Fᵀ; A = J M⁻¹ Jᵀ = Yᵀ Y, one
         // triangle of dot products mirrored; b = J u̇_free + c.
         // On the column-major storages: `J[(i, r)]` is `jac[i + 2k r]`, column `i` of `Y`
@@ -608,6 +628,33 @@ impl Persistent {
                 b[i] += col[i] * ud; // `J[(i, r)] u̇_r + b_i`: addition commutes
             }
         }
+        Ok(())
+    }
+
+    /// The end of [`Self::assemble`] for one closed point, whose rows `J_n`, `J_t` are the
+    /// columns of `self.y`: `Y = F⁻¹ Jᵀ`, `A = Yᵀ Y` and `b = J u̇_free + c` (the point's
+    /// accelerations `J u̇ + c = A λ + b`), the same operations in the same order as the
+    /// general case (the same numbers) on fixed indices: the common case of a body sliding
+    /// or sticking at one point.
+    fn assemble_one(&mut self, data: &mut Data, t: Real) -> Result<(), SimError> {
+        let nu = self.column.len();
+        let (y_n, y_t) = self.y.as_mut_slice().split_at_mut(nu);
+        let factor = &mut data.mass_factor;
+        factor.solve_factor_in_place(y_n).map_err(|e| e.at(t))?;
+        factor.solve_factor_in_place(y_t).map_err(|e| e.at(t))?;
+        let (y_n, y_t) = (&*y_n, &y_t[..nu]);
+        let (a_nn, a_tn, a_tt) = (dot(y_n, y_n), dot(y_t, y_n), dot(y_t, y_t));
+        let a = self.ev.a.as_mut_slice();
+        a[..4].copy_from_slice(&[a_nn, a_tn, a_tn, a_tt]);
+        // b = c + J u̇_free, each row summed over the speeds in order, as the general case.
+        let (b, c) = (self.b.as_mut_slice(), self.c.as_slice());
+        let (mut b_n, mut b_t) = (c[0], c[1]);
+        let udot = data.udot.as_slice();
+        for ((&ud, &jn), &jt) in udot.iter().zip(&self.eval.j_n).zip(&self.eval.j_t) {
+            b_n += jn * ud;
+            b_t += jt * ud;
+        }
+        b[..2].copy_from_slice(&[b_n, b_t]);
         Ok(())
     }
 
@@ -657,22 +704,30 @@ impl Persistent {
                 t,
                 message: "the forces of the closed contact points have no solution".to_owned(),
             })?;
-        self.ev.lambda.copy_from(x);
+        self.ev.lambda.as_mut_slice().copy_from_slice(x.as_slice());
         // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ); Y λ summed column by column in the order of
         // nalgebra's `gemv` (the same numbers), without its generic machinery.
         let (nu, lambda) = (self.column.len(), self.ev.lambda.as_slice());
         let ys = self.y.as_slice();
-        for (r, out) in self.column.iter_mut().enumerate() {
-            let mut v = ys[r] * lambda[0];
-            for (j, l) in lambda.iter().enumerate().skip(1) {
-                v += ys[j * nu + r] * l;
+        if let &[l_n, l_t] = lambda {
+            // One point: the two columns `Y_n`, `Y_t`, in the same order.
+            let (y_n, y_t) = ys[..2 * nu].split_at(nu);
+            for ((out, &yn), &yt) in self.column.iter_mut().zip(y_n).zip(y_t) {
+                *out = yn * l_n + yt * l_t;
             }
-            *out = v;
+        } else {
+            for (r, out) in self.column.iter_mut().enumerate() {
+                let mut v = ys[r] * lambda[0];
+                for (j, l) in lambda.iter().enumerate().skip(1) {
+                    v += ys[j * nu + r] * l;
+                }
+                *out = v;
+            }
         }
         (data.mass_factor)
             .solve_factor_transpose_in_place(&mut self.column)
             .map_err(|e| e.at(t))?;
-        for (a, d) in data.udot.iter_mut().zip(&self.column) {
+        for (a, d) in data.udot.as_mut_slice().iter_mut().zip(&self.column) {
             *a += d;
         }
         for i in 0..self.closed.len() {
