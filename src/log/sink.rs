@@ -37,18 +37,20 @@
 //! second channel and are reused, so that a run in its steady state allocates nothing
 //! per message.
 //!
+//! The thread is kept for the next log when its log is done ([`run_on_log_thread`]), so
+//! that a short run does not pay for a thread's start and end.
+//!
 //! Errors: an I/O error met on the sink thread is kept and returned by a later call on the
 //! calling side (a message, [`Sink::flush`] or [`Sink::finish`]); what follows it is not
 //! written. A sink dropped without [`Sink::finish`] (an early return, a panic unwinding)
-//! sends its open batch, closes the channel and waits for the thread, which drops the
-//! `mcap::Writer`: its `Drop` finishes the file, so the log stays a valid MCAP file
+//! sends its open batch, closes the channel and waits for the thread to be done with the
+//! log: it drops the `mcap::Writer`: its `Drop` finishes the file, so the log stays a valid MCAP file
 //! holding everything given so far.
 
 use std::io::{Seek, Write};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 
 use mcap::McapError;
 use mcap::records::{MessageHeader, Metadata};
@@ -261,12 +263,14 @@ pub(super) struct Sink<W: Write + Seek + Send + 'static> {
     /// Tests: whether samples go as numbers whatever the sink thread's progress.
     #[cfg(test)]
     pub(super) defer: Option<bool>,
-    thread: Option<JoinHandle<Option<Result<W, McapError>>>>,
+    /// What [`serve`] returns, once it has returned: disconnected without it if the
+    /// thread panicked.
+    done: Option<Receiver<Option<Result<W, McapError>>>>,
 }
 
 impl<W: Write + Seek + Send + 'static> Sink<W> {
-    /// Moves `mcap` (which must not limit its chunks' size itself) to a new thread that
-    /// writes what the sink is given, registering `channels` right before the first
+    /// Moves `mcap` (which must not limit its chunks' size itself) to a log thread (an
+    /// idle one, or a new one: [`run_on_log_thread`]) that writes what the sink is given, registering `channels` right before the first
     /// message, and closing a chunk once its messages reach `chunk_size` bytes.
     pub(super) fn spawn(
         mcap: mcap::Writer<W>,
@@ -289,10 +293,14 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         let shared = Arc::clone(&failure);
         let written = Arc::new(AtomicU64::new(0));
         let counter = Arc::clone(&written);
-        let thread = std::thread::Builder::new()
-            .name("ricochet-log".to_owned())
-            .spawn(move || serve(writing, &inbox, &recycle, (&shared, &counter)))
-            .map_err(LogError::Thread)?;
+        let (answer, done) = sync_channel(1);
+        run_on_log_thread(Box::new(move |idle: &mut dyn FnMut()| {
+            let result = serve(writing, &inbox, &recycle, (&shared, &counter));
+            // Idle before answering, so that a log started as soon as this one is
+            // finished finds the thread free.
+            idle();
+            let _ = answer.send(result);
+        }))?;
         Ok(Sink {
             commands: Some(commands),
             open: Batch::default(),
@@ -304,7 +312,7 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             written,
             #[cfg(test)]
             defer: None,
-            thread: Some(thread),
+            done: Some(done),
         })
     }
 
@@ -441,8 +449,8 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.send_batch()?;
         self.send(Command::Finish)?;
         self.commands = None;
-        let thread = self.thread.take().ok_or_else(|| self.failure.stopped())?;
-        match thread.join() {
+        let done = self.done.take().ok_or_else(|| self.failure.stopped())?;
+        match done.recv() {
             Ok(Some(result)) => Ok(result?),
             Ok(None) => {
                 self.failure.take()?;
@@ -474,13 +482,73 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
 }
 
 impl<W: Write + Seek + Send + 'static> Drop for Sink<W> {
-    /// Sends the open batch, closes the channel and waits for the thread, which finishes
-    /// the file if [`Sink::finish`] was not called.
+    /// Sends the open batch, closes the channel and waits for the thread to be done with
+    /// the log; it finishes the file if [`Sink::finish`] was not called.
     fn drop(&mut self) {
         let _ = self.send_batch();
         self.commands = None;
-        if let Some(thread) = self.thread.take() {
-            let _ = thread.join();
+        if let Some(done) = self.done.take() {
+            let _ = done.recv();
+        }
+    }
+}
+
+/// A log's work for a log thread: it calls its argument once it is done with the log
+/// (which offers the thread to the next log) and then answers.
+type Job = Box<dyn FnOnce(&mut dyn FnMut()) + Send>;
+
+/// Log threads that wait for a log to write, each as the sender of its jobs.
+static IDLE_LOG_THREADS: Mutex<Vec<SyncSender<Job>>> = Mutex::new(Vec::new());
+
+/// Idle log threads kept for later logs; more end with their log.
+const IDLE_LOG_THREADS_KEPT: usize = 4;
+
+/// Runs `job` on an idle log thread, or on a new one (`ricochet-log`).
+///
+/// A log's thread is kept for the next log rather than spawned for each (issue 16): Kane's
+/// pendulum, 5 s at 100 Hz, is a run of ~1.5 ms, and spawning the thread cost its
+/// simulation ~25 µs at the start, joining it ~30–50 µs at the end (the thread's exit and
+/// the wake-up), and each new thread took fresh memory for the log's buffers (the
+/// allocator gives a new thread an arena whose freed memory goes back to the system):
+/// ~100 page faults of a run. A thread that panics ends, and is not kept.
+fn run_on_log_thread(mut job: Job) -> Result<(), LogError> {
+    loop {
+        let idle = IDLE_LOG_THREADS.lock().ok().and_then(|mut idle| idle.pop());
+        let Some(thread) = idle else { break };
+        match thread.send(job) {
+            Ok(()) => return Ok(()),
+            // That thread has ended (not expected: it ends only by a panic of its log's
+            // job, before it offers itself again).
+            Err(std::sync::mpsc::SendError(back)) => job = back,
+        }
+    }
+    let (jobs, inbox) = sync_channel::<Job>(1);
+    std::thread::Builder::new()
+        .name("ricochet-log".to_owned())
+        .spawn(move || log_thread(job, &jobs, &inbox))
+        .map(drop)
+        .map_err(LogError::Thread)
+}
+
+/// A log thread: runs `job`, offers itself for another (`me` into
+/// [`IDLE_LOG_THREADS`], unless enough wait there), and runs the next from `inbox`.
+fn log_thread(mut job: Job, me: &SyncSender<Job>, inbox: &Receiver<Job>) {
+    loop {
+        let mut kept = false;
+        job(&mut || {
+            if let Ok(mut idle) = IDLE_LOG_THREADS.lock()
+                && idle.len() < IDLE_LOG_THREADS_KEPT
+            {
+                idle.push(me.clone());
+                kept = true;
+            }
+        });
+        if !kept {
+            return;
+        }
+        match inbox.recv() {
+            Ok(next) => job = next,
+            Err(_) => return,
         }
     }
 }
@@ -774,5 +842,68 @@ mod tests {
         let bound = CHUNKS_PER_SIZE * 6 + total.div_ceil(MAX_CHUNK_SIZE);
         assert!(chunks <= bound, "{chunks} > {bound}");
         assert!(chunks * 23 < total / first, "{chunks}");
+    }
+
+    /// A log of `n` `/log` lines in small chunks, its bytes.
+    fn small_log(n: usize) -> Vec<u8> {
+        let options = crate::log::LogOptions {
+            chunk_size: 2048,
+            ..crate::log::LogOptions::default()
+        };
+        let mut log = crate::log::LogWriter::new(std::io::Cursor::new(Vec::new()), options)
+            .expect("a log in memory");
+        for k in 0..n {
+            log.log(k as f64 * 0.01, LogLevel::Info, &format!("line {k}"))
+                .expect("a line");
+        }
+        log.finish().expect("finished").into_inner()
+    }
+
+    /// The `/log` lines of `bytes`.
+    fn lines(bytes: &[u8]) -> usize {
+        let stream = mcap::MessageStream::new(bytes).expect("an MCAP file");
+        (stream.map(|m| m.expect("a message")))
+            .filter(|m| m.channel.topic == Topic::Log.name())
+            .count()
+    }
+
+    /// Logs written one after another (on the log thread of the one before, kept) and
+    /// eight at once (more threads than are kept) hold every line, the same bytes each,
+    /// and no more idle log threads are kept than `IDLE_LOG_THREADS_KEPT`.
+    #[test]
+    fn logs_on_kept_threads_and_at_once_are_the_same_bytes() {
+        let first = small_log(300);
+        assert_eq!(lines(&first), 300);
+        for _ in 0..5 {
+            assert!(small_log(300) == first);
+        }
+        let at_once: Vec<Vec<u8>> = std::thread::scope(|scope| {
+            let logs: Vec<_> = (0..8).map(|_| scope.spawn(|| small_log(300))).collect();
+            (logs.into_iter())
+                .map(|log| log.join().expect("a log"))
+                .collect()
+        });
+        assert!(at_once.iter().all(|bytes| *bytes == first));
+        let idle = IDLE_LOG_THREADS
+            .lock()
+            .map_or(usize::MAX, |idle| idle.len());
+        assert!(
+            idle <= IDLE_LOG_THREADS_KEPT,
+            "{idle} idle log threads kept"
+        );
+    }
+
+    /// A job that panics ends its thread without answering (a sink reports it as
+    /// `SinkFailed`), and later logs are written.
+    #[test]
+    fn a_panicking_log_job_ends_its_thread_and_later_logs_are_written() {
+        let (answer, reply) = sync_channel::<()>(1);
+        let job: Job = Box::new(move |_idle: &mut dyn FnMut()| {
+            let _answer = answer;
+            panic!("a log job panics (this test expects it)");
+        });
+        run_on_log_thread(job).expect("a log thread");
+        assert!(reply.recv().is_err());
+        assert_eq!(lines(&small_log(10)), 10);
     }
 }
