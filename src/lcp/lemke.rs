@@ -131,13 +131,22 @@ pub enum LemkeError {
 
 /// The workspace of Lemke's algorithm: its buffers grow to the largest problem solved and
 /// are reused, so that a warmed-up workspace solves without allocating.
+///
+/// `B⁻¹` is kept column by column: the entering column `B⁻¹ a_e`, the refinement's
+/// `B⁻¹ r` and the pivot's row operations are sweeps down contiguous columns, every entry
+/// of a result accumulated in the same order (over `k`) as a row-by-row dot product.
+/// Column `k` of `B⁻¹` stays the unit vector of its row while `w_k` is basic (`B⁻¹ =
+/// [[I, −X Y⁻¹], [0, Y⁻¹]]` up to a permutation, `Y` the rows of the basic `z`'s columns
+/// that left): such a column is one term of a sum and no work in a pivot. Only terms that
+/// are products with an exact zero are left out; see [`Lemke::pivot`] for why that
+/// changes no bit of the path or of the solution.
 #[derive(Clone, Debug, Default)]
 pub struct Lemke {
     /// Problem size `n`.
     n: usize,
     /// The most pivots of one run; `None`: `max(1000, 50 n)`.
     pub max_pivots: Option<usize>,
-    /// `B⁻¹` (n × n, row-major).
+    /// `B⁻¹` (n × n, column-major: `B⁻¹_ik` at `k n + i`).
     binv: Vec<Real>,
     /// Basic values `x_B = B⁻¹ q̂` (n).
     xb: Vec<Real>,
@@ -147,8 +156,24 @@ pub struct Lemke {
     col: Vec<Real>,
     /// The covering vector `d` (n).
     cover: Vec<Real>,
-    /// Scratch: the residual of the refinement, then the rows tied in the ratio test (n).
+    /// Scratch: the residual of the refinement (n).
     scratch: Vec<Real>,
+    /// Scratch: running sums of the column sweeps (n).
+    acc: Vec<Real>,
+    /// Scratch: running sums of magnitudes of the entering column's terms, then the
+    /// ratios of the ratio test (n).
+    size: Vec<Real>,
+    /// The scaled `q̂ = q / s_q` (n).
+    qhat: Vec<Real>,
+    /// The row of column `k` of `B⁻¹` if that column is a unit vector (the `1` there,
+    /// exact zeros elsewhere), else [`DENSE`] (n).
+    unit: Vec<usize>,
+    /// `M`, unscaled, contiguous (n × n, column-major).
+    mc: Vec<Real>,
+    /// The rows of `M`'s nonzero entries, column after column.
+    nz: Vec<usize>,
+    /// Where each column's rows start in `nz` (n + 1).
+    nz_start: Vec<usize>,
     /// Tied rows of the ratio test.
     ties: Vec<usize>,
     /// `z₀`'s value when it entered (the scale of [`Z0_TOL`]).
@@ -242,13 +267,13 @@ impl Lemke {
         // Scale to max|M̂| = max|q̂| = 1: M̂ = M / sm, q̂ = q / sq; then z = ẑ sq / sm.
         let sm = m.iter().fold(0.0 as Real, |acc, v| acc.max(v.abs()));
         let sm = if sm > 0.0 { sm } else { 1.0 };
-        self.start(q, sq);
+        self.start(m, q, sq);
         let max_pivots = self.max_pivots.unwrap_or(1000.max(50 * n));
         let z0 = 2 * n;
         // z₀ enters; the row of the most negative q̂ leaves (the lexicographic minimum of
         // [q̂_i, e_i] / d_i: col = −d = −1, all entries negative, so the test takes |col|).
         let mut entering = z0;
-        self.column(m, sm, entering);
+        self.column(sm, entering);
         let mut pivots = 0;
         let mut leave = self.ratio_test(true);
         // z₀'s start −q̂_r / d_r (x_B,r = q̂_r < 0 over col_r = −d_r), and its row.
@@ -268,7 +293,7 @@ impl Lemke {
             }
             // x_B = B⁻¹ q̂ for the new basis, to rounding: the ratio tests that follow
             // compare basic values that must be exactly zero on degenerate problems.
-            self.refine(m, q, sm, sq);
+            self.refine(sm);
             // z₀ (still in the row it entered) at zero: the basis is complementary but for
             // the pair of the next entering variable, both nonbasic; a solution.
             if self.xb[z0_row] <= Z0_TOL * self.z0_start {
@@ -276,12 +301,12 @@ impl Lemke {
             }
             // The complement of the variable that left enters.
             entering = if left < n { left + n } else { left - n };
-            self.column(m, sm, entering);
+            self.column(sm, entering);
             leave = self.ratio_test(false);
         }
-        self.refine(m, q, sm, sq);
-        self.refine(m, q, sm, sq);
-        self.extract(m, q, sm, sq);
+        self.refine(sm);
+        self.refine(sm);
+        self.extract(q, sm, sq);
         Ok(LemkeStatus::Solved { pivots })
     }
 
@@ -289,24 +314,34 @@ impl Lemke {
     fn reserve(&mut self, n: usize) {
         self.n = n;
         self.binv.resize(n * n, 0.0);
+        self.mc.resize(n * n, 0.0);
         for v in [
             &mut self.xb,
             &mut self.col,
             &mut self.cover,
             &mut self.scratch,
+            &mut self.acc,
+            &mut self.size,
+            &mut self.qhat,
             &mut self.z,
             &mut self.w,
         ] {
             v.resize(n, 0.0);
         }
         self.basis.resize(n, 0);
+        self.unit.resize(n, 0);
+        self.nz_start.resize(n + 1, 0);
+        self.nz.clear();
+        self.nz.reserve(n * n);
         self.ties.clear();
         self.ties.reserve(n);
     }
 
-    /// The starting basis: every `w_i` basic, `B = I`, `x_B = q̂`.
-    fn start<R: Dim, QS: RawStorage<Real, R, U1>>(
+    /// The starting basis: every `w_i` basic, `B = I`, `x_B = q̂`; and `M` copied into the
+    /// contiguous [`Lemke::mc`] with the rows of each column's nonzero entries.
+    fn start<R: Dim, C: Dim, S: RawStorage<Real, R, C>, QS: RawStorage<Real, R, U1>>(
         &mut self,
+        m: &Matrix<Real, R, C, S>,
         q: &Matrix<Real, R, U1, QS>,
         sq: Real,
     ) {
@@ -314,42 +349,73 @@ impl Lemke {
         self.binv[..n * n].fill(0.0);
         for i in 0..n {
             self.binv[i * n + i] = 1.0;
-            self.xb[i] = q[i] / sq;
+            self.unit[i] = i;
+            self.qhat[i] = q[i] / sq;
+            self.xb[i] = self.qhat[i];
             self.basis[i] = i;
         }
+        self.nz.clear();
+        for j in 0..n {
+            self.nz_start[j] = self.nz.len();
+            let mj = &mut self.mc[j * n..(j + 1) * n];
+            for (k, v) in mj.iter_mut().enumerate() {
+                *v = m[(k, j)];
+                if *v != 0.0 {
+                    self.nz.push(k);
+                }
+            }
+        }
+        self.nz_start[n] = self.nz.len();
     }
 
     /// The entering column `col = B⁻¹ a_e` of variable `e`, where the augmented system is
     /// `I w − M̂ z − d z₀ = q̂`: `a_e = e_j` for `w_j`, `−M̂_:j` for `z_j`, `−d` for `z₀`.
-    fn column<R: Dim, C: Dim, S: RawStorage<Real, R, C>>(
-        &mut self,
-        m: &Matrix<Real, R, C, S>,
-        sm: Real,
-        e: usize,
-    ) {
+    ///
+    /// Each entry is the sum `Σ_k B⁻¹_ik a_k` in the order of `k`, swept column by column
+    /// of `B⁻¹`. For `z_j` the terms of `M`'s zero entries and of a unit column's zeros are
+    /// left out: they add nothing to the sum of magnitudes, and change the sum at most in
+    /// the sign of a zero, which the cancellation test maps to 0.
+    fn column(&mut self, sm: Real, e: usize) {
         let n = self.n;
-        for i in 0..n {
-            let row = &self.binv[i * n..(i + 1) * n];
-            self.col[i] = if e < n {
-                row[e]
-            } else if e < 2 * n {
-                let j = e - n;
-                let (sum, size) = (0..n).fold((0.0 as Real, 0.0 as Real), |(s, a), k| {
-                    let t = row[k] * m[(k, j)];
-                    (s + t, a + t.abs())
-                });
+        let col = &mut self.col[..n];
+        if e < n {
+            col.copy_from_slice(&self.binv[e * n..(e + 1) * n]);
+        } else if e < 2 * n {
+            let j = e - n;
+            let (sum, size) = (&mut self.acc[..n], &mut self.size[..n]);
+            sum.fill(0.0);
+            size.fill(0.0);
+            for &k in &self.nz[self.nz_start[j]..self.nz_start[j + 1]] {
+                let mk = self.mc[j * n + k];
+                let u = self.unit[k];
+                if u != DENSE {
+                    // The term 1 · m_kj.
+                    sum[u] += mk;
+                    size[u] += mk.abs();
+                    continue;
+                }
+                let bk = &self.binv[k * n..(k + 1) * n];
+                for ((s, a), &b) in sum.iter_mut().zip(size.iter_mut()).zip(bk) {
+                    let t = b * mk;
+                    *s += t;
+                    *a += t.abs();
+                }
+            }
+            for ((c, &s), &a) in col.iter_mut().zip(sum.iter()).zip(size.iter()) {
                 // Cancellation down to the rounding of B⁻¹: a zero (CANCEL_TOL).
-                if sum.abs() <= CANCEL_TOL * size {
+                *c = if s.abs() <= CANCEL_TOL * a {
                     0.0
                 } else {
-                    -sum / sm
-                }
-            } else {
-                -row.iter()
-                    .zip(&self.cover[..n])
-                    .map(|(a, d)| a * d)
-                    .sum::<Real>()
-            };
+                    -s / sm
+                };
+            }
+        } else {
+            // −Σ_k B⁻¹_ik d_k.
+            let sum = &mut self.acc[..n];
+            binv_mul(&self.binv[..n * n], &self.unit[..n], &self.cover[..n], sum);
+            for (c, &s) in col.iter_mut().zip(sum.iter()) {
+                *c = -s;
+            }
         }
     }
 
@@ -372,11 +438,13 @@ impl Lemke {
             }
         };
         // The minimum ratio, and the rows that tie with it.
+        let ratios = &mut self.size[..n];
         let mut min = Real::INFINITY;
-        for i in 0..n {
-            let c = piv(self.col[i]);
+        for ((ratio, &c), &x) in ratios.iter_mut().zip(&self.col[..n]).zip(&self.xb[..n]) {
+            let c = piv(c);
             if c > 0.0 {
-                min = min.min(self.xb[i] / c);
+                *ratio = x / c;
+                min = min.min(*ratio);
             }
         }
         if !min.is_finite() {
@@ -384,9 +452,8 @@ impl Lemke {
         }
         let tie = |a: Real, b: Real| (a - b).abs() <= TIE_TOL * (1.0 + a.abs().max(b.abs()));
         self.ties.clear();
-        for i in 0..n {
-            let c = piv(self.col[i]);
-            if c > 0.0 && tie(self.xb[i] / c, min) {
+        for (i, (&c, &ratio)) in self.col[..n].iter().zip(ratios.iter()).enumerate() {
+            if piv(c) > 0.0 && tie(ratio, min) {
                 self.ties.push(i);
             }
         }
@@ -396,7 +463,7 @@ impl Lemke {
         // Lexicographic: the smallest B⁻¹_ij / col_i for j = 0, 1, … among the tied rows.
         let mut j = 0;
         while self.ties.len() > 1 && j < n {
-            let ratio = |i: usize| self.binv[i * n + j] / piv(self.col[i]);
+            let ratio = |i: usize| self.binv[j * n + i] / piv(self.col[i]);
             let min = self
                 .ties
                 .iter()
@@ -410,29 +477,49 @@ impl Lemke {
 
     /// One pivot: variable `e` (whose column is `col`) enters at row `r`; returns the
     /// variable that left. Gauss–Jordan on `[x_B | B⁻¹]`: row `r` divided by `col_r`, then
-    /// `col_i` times it subtracted from every other row.
+    /// `col_i` times it subtracted from every other row, column by column of `B⁻¹`.
+    ///
+    /// **What is left out, and why no bit changes.** A column whose entry `pv` in row `r`
+    /// is zero is left as it is (every unit column but the one of row `r`, which becomes a
+    /// full column): `v − col_i · (±0)` differs from `v` at most in the sign of a zero, and
+    /// so does `v − 0 · pv`, which the loop computes for the rows whose `col_i` is zero.
+    /// The same holds for the zero terms left out of [`Lemke::column`] and
+    /// [`Lemke::refine`]. Signs of zeros in `B⁻¹`, `x_B` and the entering column reach
+    /// nothing that decides: a candidate row needs `col_i > 0`, the multipliers are tested
+    /// against 0, ratios tie by `|a − b|`, `z₀`'s test is `x_B ≤ ε`, and [`Lemke::extract`]
+    /// maps `x_B ≤ 0` to `+0`. Every other value is computed as in the textbook loops (for
+    /// finite `B⁻¹`).
     fn pivot(&mut self, r: usize, e: usize) -> usize {
         let n = self.n;
         let p = self.col[r];
-        let (before, rest) = self.binv[..n * n].split_at_mut(r * n);
-        let (prow, after) = rest.split_at_mut(n);
-        for v in prow.iter_mut() {
-            *v /= p;
+        // The multipliers, row r's zero (it is divided instead).
+        let f = &mut self.acc[..n];
+        f.copy_from_slice(&self.col[..n]);
+        f[r] = 0.0;
+        for (bk, u) in self.binv[..n * n]
+            .chunks_exact_mut(n)
+            .zip(self.unit[..n].iter_mut())
+        {
+            if *u != DENSE {
+                if *u != r {
+                    continue;
+                }
+                *u = DENSE;
+            }
+            let pv = bk[r] / p;
+            if pv == 0.0 {
+                continue;
+            }
+            for (v, &fi) in bk.iter_mut().zip(f.iter()) {
+                *v -= fi * pv;
+            }
+            bk[r] = pv;
         }
         self.xb[r] /= p;
         let xr = self.xb[r];
-        for (i, row) in before
-            .chunks_exact_mut(n)
-            .chain(after.chunks_exact_mut(n))
-            .enumerate()
-        {
-            let i = if i < r { i } else { i + 1 };
-            let f = self.col[i];
-            if f != 0.0 {
-                for (v, pv) in row.iter_mut().zip(prow.iter()) {
-                    *v -= f * pv;
-                }
-                self.xb[i] -= f * xr;
+        for (x, &fi) in self.xb[..n].iter_mut().zip(f.iter()) {
+            if fi != 0.0 {
+                *x -= fi * xr;
             }
         }
         std::mem::replace(&mut self.basis[r], e)
@@ -440,47 +527,38 @@ impl Lemke {
 
     /// One step of iterative refinement of the basis: `x_B += B⁻¹ (q̂ − Σ_b a_b x_b)`, with
     /// the basis' columns `a_b` taken from `M` (`e_j` for `w_j`, `−M̂_:j` for `z_j`, `−d` for
-    /// `z₀`).
-    fn refine<R: Dim, C: Dim, S: RawStorage<Real, R, C>, QS: RawStorage<Real, R, U1>>(
-        &mut self,
-        m: &Matrix<Real, R, C, S>,
-        q: &Matrix<Real, R, U1, QS>,
-        sm: Real,
-        sq: Real,
-    ) {
+    /// `z₀`). `B⁻¹ r` is summed over `k` in order from −0, as `Iterator::sum` would.
+    fn refine(&mut self, sm: Real) {
         let n = self.n;
-        for k in 0..n {
-            self.scratch[k] = q[k] / sq;
-        }
+        let r = &mut self.scratch[..n];
+        r.copy_from_slice(&self.qhat[..n]);
         for (b, &var) in self.basis[..n].iter().enumerate() {
             let x = self.xb[b];
             if var < n {
-                self.scratch[var] -= x;
+                r[var] -= x;
             } else if var < 2 * n {
                 let (j, xs) = (var - n, x / sm);
-                for k in 0..n {
-                    self.scratch[k] += m[(k, j)] * xs;
+                for (v, &mk) in r.iter_mut().zip(&self.mc[j * n..(j + 1) * n]) {
+                    *v += mk * xs;
                 }
             } else {
-                for k in 0..n {
-                    self.scratch[k] += self.cover[k] * x;
+                for (v, &d) in r.iter_mut().zip(&self.cover[..n]) {
+                    *v += d * x;
                 }
             }
         }
-        for i in 0..n {
-            let row = &self.binv[i * n..(i + 1) * n];
-            self.xb[i] += row
-                .iter()
-                .zip(&self.scratch[..n])
-                .map(|(a, b)| a * b)
-                .sum::<Real>();
+        let sum = &mut self.acc[..n];
+        binv_mul(&self.binv[..n * n], &self.unit[..n], r, sum);
+        for (x, &s) in self.xb[..n].iter_mut().zip(sum.iter()) {
+            *x += s;
         }
     }
 
-    /// `z` from the basis (unscaled, negatives of rounding set to 0), and `w = M z + q`.
-    fn extract<R: Dim, C: Dim, S: RawStorage<Real, R, C>, QS: RawStorage<Real, R, U1>>(
+    /// `z` from the basis (unscaled, negatives of rounding and zeros set to `+0`, as
+    /// `maxsd(v, +0)`), and `w = M z + q`
+    /// (each row's `Σ_j M_ij z_j` in the order of `j` from −0, as `Iterator::sum`'s).
+    fn extract<R: Dim, QS: RawStorage<Real, R, U1>>(
         &mut self,
-        m: &Matrix<Real, R, C, S>,
         q: &Matrix<Real, R, U1, QS>,
         sm: Real,
         sq: Real,
@@ -489,11 +567,336 @@ impl Lemke {
         self.z[..n].fill(0.0);
         for (b, &var) in self.basis[..n].iter().enumerate() {
             if (n..2 * n).contains(&var) {
-                self.z[var - n] = (self.xb[b] * sq / sm).max(0.0);
+                let v = self.xb[b] * sq / sm;
+                self.z[var - n] = if v > 0.0 { v } else { 0.0 };
             }
         }
-        for i in 0..n {
-            self.w[i] = q[i] + (0..n).map(|j| m[(i, j)] * self.z[j]).sum::<Real>();
+        let sum = &mut self.acc[..n];
+        sum.fill(-0.0);
+        for (mj, &zj) in self.mc[..n * n].chunks_exact(n).zip(&self.z[..n]) {
+            for (s, &v) in sum.iter_mut().zip(mj) {
+                *s += v * zj;
+            }
         }
+        for (i, w) in self.w[..n].iter_mut().enumerate() {
+            *w = q[i] + sum[i];
+        }
+    }
+}
+
+/// A column of `B⁻¹` that is not a unit vector ([`Lemke::unit`]).
+const DENSE: usize = usize::MAX;
+
+/// `sum = B⁻¹ v` (`B⁻¹` column-major, n × n, its unit columns marked in `unit`), each entry
+/// summed over `k` in order from `−0`, as `Iterator::sum` of the row's products. Terms
+/// with a zero factor (a unit column's zeros, `v_k = 0`) are left out: they change a sum
+/// at most in the sign of a zero ([`Lemke::pivot`]).
+fn binv_mul(binv: &[Real], unit: &[usize], v: &[Real], sum: &mut [Real]) {
+    let n = v.len();
+    sum.fill(-0.0);
+    for ((bk, &u), &vk) in binv.chunks_exact(n).zip(unit).zip(v) {
+        if u != DENSE {
+            // The term 1 · v_k.
+            sum[u] += vk;
+        } else if vk != 0.0 {
+            for (s, &b) in sum.iter_mut().zip(bk) {
+                *s += b * vk;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{DMatrix, DVector};
+
+    use super::*;
+    use crate::linalg::tests::Lcg;
+
+    /// The textbook loops of this module before `B⁻¹` went by columns (row-major `B⁻¹`,
+    /// row-by-row dot products, no term left out): the reference the workspace must match
+    /// to the bit.
+    struct Textbook {
+        n: usize,
+        binv: Vec<Real>,
+        xb: Vec<Real>,
+        basis: Vec<usize>,
+        col: Vec<Real>,
+        cover: Vec<Real>,
+        ties: Vec<usize>,
+        z: Vec<Real>,
+        w: Vec<Real>,
+    }
+
+    impl Textbook {
+        fn solve(
+            m: &DMatrix<Real>,
+            q: &DVector<Real>,
+            d: Option<&[Real]>,
+        ) -> (LemkeStatus, Vec<Real>, Vec<Real>) {
+            let n = q.len();
+            let mut t = Textbook {
+                n,
+                binv: vec![0.0; n * n],
+                xb: vec![0.0; n],
+                basis: (0..n).collect(),
+                col: vec![0.0; n],
+                cover: d.map_or(vec![1.0; n], <[Real]>::to_vec),
+                ties: Vec::new(),
+                z: vec![0.0; n],
+                w: vec![0.0; n],
+            };
+            let sq = q.iter().fold(0.0 as Real, |acc, v| acc.max(v.abs()));
+            if q.iter().all(|&v| v >= 0.0) {
+                return (
+                    LemkeStatus::Solved { pivots: 0 },
+                    t.z,
+                    q.as_slice().to_vec(),
+                );
+            }
+            let sm = m.iter().fold(0.0 as Real, |acc, v| acc.max(v.abs()));
+            let sm = if sm > 0.0 { sm } else { 1.0 };
+            for i in 0..n {
+                t.binv[i * n + i] = 1.0;
+                t.xb[i] = q[i] / sq;
+            }
+            let max_pivots = 1000.max(50 * n);
+            let z0 = 2 * n;
+            let mut entering = z0;
+            t.column(m, sm, entering);
+            let mut pivots = 0;
+            let mut leave = t.ratio_test(true);
+            let z0_row = leave.unwrap_or(0);
+            let z0_start = leave.map_or(0.0, |r| t.xb[r] / t.col[r]);
+            loop {
+                let Some(r) = leave else {
+                    return (LemkeStatus::RayTermination { pivots }, t.z, t.w);
+                };
+                if pivots == max_pivots {
+                    return (LemkeStatus::PivotLimit { pivots }, t.z, t.w);
+                }
+                let left = t.pivot(r, entering);
+                pivots += 1;
+                if left == z0 {
+                    break;
+                }
+                t.refine(m, q, sm, sq);
+                if t.xb[z0_row] <= Z0_TOL * z0_start {
+                    break;
+                }
+                entering = if left < n { left + n } else { left - n };
+                t.column(m, sm, entering);
+                leave = t.ratio_test(false);
+            }
+            t.refine(m, q, sm, sq);
+            t.refine(m, q, sm, sq);
+            for (b, &var) in t.basis.iter().enumerate() {
+                if (n..2 * n).contains(&var) {
+                    // `.max(0.0)`, as main's build computes it (`maxsd v, +0`: `+0` for
+                    // either zero; `f64::max` leaves the sign of a zero open).
+                    let v = t.xb[b] * sq / sm;
+                    t.z[var - n] = if v > 0.0 { v } else { 0.0 };
+                }
+            }
+            for i in 0..n {
+                t.w[i] = q[i] + (0..n).map(|j| m[(i, j)] * t.z[j]).sum::<Real>();
+            }
+            (LemkeStatus::Solved { pivots }, t.z, t.w)
+        }
+
+        fn column(&mut self, m: &DMatrix<Real>, sm: Real, e: usize) {
+            let n = self.n;
+            for i in 0..n {
+                let row = &self.binv[i * n..(i + 1) * n];
+                self.col[i] = if e < n {
+                    row[e]
+                } else if e < 2 * n {
+                    let j = e - n;
+                    let (sum, size) = (0..n).fold((0.0 as Real, 0.0 as Real), |(s, a), k| {
+                        let t = row[k] * m[(k, j)];
+                        (s + t, a + t.abs())
+                    });
+                    if sum.abs() <= CANCEL_TOL * size {
+                        0.0
+                    } else {
+                        -sum / sm
+                    }
+                } else {
+                    -row.iter()
+                        .zip(&self.cover)
+                        .map(|(a, d)| a * d)
+                        .sum::<Real>()
+                };
+            }
+        }
+
+        fn ratio_test(&mut self, initial: bool) -> Option<usize> {
+            let n = self.n;
+            let cmax = self.col.iter().fold(0.0 as Real, |a, v| a.max(v.abs()));
+            let piv = |c: Real| {
+                if initial {
+                    c.abs()
+                } else if c > PIVOT_TOL * cmax {
+                    c
+                } else {
+                    0.0
+                }
+            };
+            let mut min = Real::INFINITY;
+            for i in 0..n {
+                let c = piv(self.col[i]);
+                if c > 0.0 {
+                    min = min.min(self.xb[i] / c);
+                }
+            }
+            if !min.is_finite() {
+                return None;
+            }
+            let tie = |a: Real, b: Real| (a - b).abs() <= TIE_TOL * (1.0 + a.abs().max(b.abs()));
+            self.ties.clear();
+            for i in 0..n {
+                let c = piv(self.col[i]);
+                if c > 0.0 && tie(self.xb[i] / c, min) {
+                    self.ties.push(i);
+                }
+            }
+            if let Some(&r) = self.ties.iter().find(|&&i| self.basis[i] == 2 * n) {
+                return Some(r);
+            }
+            let mut j = 0;
+            while self.ties.len() > 1 && j < n {
+                let ratio = |i: usize| self.binv[i * n + j] / piv(self.col[i]);
+                let min = (self.ties.iter().map(|&i| ratio(i))).fold(Real::INFINITY, Real::min);
+                self.ties.retain(|&i| tie(ratio(i), min));
+                j += 1;
+            }
+            self.ties.first().copied()
+        }
+
+        fn pivot(&mut self, r: usize, e: usize) -> usize {
+            let n = self.n;
+            let p = self.col[r];
+            for v in &mut self.binv[r * n..(r + 1) * n] {
+                *v /= p;
+            }
+            self.xb[r] /= p;
+            let prow: Vec<Real> = self.binv[r * n..(r + 1) * n].to_vec();
+            for i in (0..n).filter(|&i| i != r) {
+                let f = self.col[i];
+                if f != 0.0 {
+                    for (v, pv) in self.binv[i * n..(i + 1) * n].iter_mut().zip(&prow) {
+                        *v -= f * pv;
+                    }
+                    self.xb[i] -= f * self.xb[r];
+                }
+            }
+            std::mem::replace(&mut self.basis[r], e)
+        }
+
+        fn refine(&mut self, m: &DMatrix<Real>, q: &DVector<Real>, sm: Real, sq: Real) {
+            let n = self.n;
+            let mut r: Vec<Real> = q.iter().map(|v| v / sq).collect();
+            for (b, &var) in self.basis.iter().enumerate() {
+                let x = self.xb[b];
+                if var < n {
+                    r[var] -= x;
+                } else if var < 2 * n {
+                    let (j, xs) = (var - n, x / sm);
+                    for (k, rk) in r.iter_mut().enumerate() {
+                        *rk += m[(k, j)] * xs;
+                    }
+                } else {
+                    for (rk, d) in r.iter_mut().zip(&self.cover) {
+                        *rk += d * x;
+                    }
+                }
+            }
+            for i in 0..n {
+                let row = &self.binv[i * n..(i + 1) * n];
+                self.xb[i] += row.iter().zip(&r).map(|(a, b)| a * b).sum::<Real>();
+            }
+        }
+    }
+
+    /// Stewart–Trinkle's LCP of `c` contacts (`lcp::friction`'s layout: `x_n, f⁺, f⁻, σ`)
+    /// with `A = J Jᵀ` of rank `dof < 2c` (redundant points, nearly equal columns) and
+    /// some points at rest (`b_n = 0`): the degenerate, ill-conditioned problems of a chain
+    /// lying on the floor.
+    fn contact_lcp(rng: &mut Lcg, c: usize, dof: usize) -> (DMatrix<Real>, DVector<Real>) {
+        let mut j = DMatrix::from_fn(2 * c, dof, |_, _| rng.next());
+        // A pair of nearly coincident points.
+        if c >= 2 {
+            for k in 0..dof {
+                j[(2, k)] = j[(0, k)] * (1.0 + 1e-9 * rng.next());
+            }
+        }
+        let a = &j * j.transpose();
+        let b = DVector::from_fn(2 * c, |i, _| match (i % 2, rng.unit()) {
+            (0, u) if u < 0.3 => 0.0,
+            (_, u) => 2.0 * u - 1.2,
+        });
+        let mu = 0.1 + rng.unit();
+        let k = 4 * c;
+        let mut m = DMatrix::zeros(k, k);
+        let mut q = DVector::zeros(k);
+        let map = |i: usize| {
+            [
+                (4 * i, 2 * i, 1.0),
+                (4 * i + 1, 2 * i + 1, 1.0),
+                (4 * i + 2, 2 * i + 1, -1.0),
+            ]
+        };
+        for r in 0..c {
+            for (lr, ar, sr) in map(r) {
+                q[lr] = sr * b[ar];
+                for s in 0..c {
+                    for (lc, ac, sc) in map(s) {
+                        m[(lr, lc)] = sr * sc * a[(ar, ac)];
+                    }
+                }
+            }
+            let (xn, fp, fm, sigma) = (4 * r, 4 * r + 1, 4 * r + 2, 4 * r + 3);
+            m[(fp, sigma)] = 1.0;
+            m[(fm, sigma)] = 1.0;
+            m[(sigma, xn)] = mu;
+            m[(sigma, fp)] = -1.0;
+            m[(sigma, fm)] = -1.0;
+        }
+        (m, q)
+    }
+
+    /// The workspace's path and solution are the textbook loops' to the bit (status,
+    /// pivots, every bit of `z` and `w`, signs of zeros included), on 400 degenerate contact
+    /// LCPs of 1 to 12 points, along `d = 1` and along random covering vectors, and on dense
+    /// random matrices; one workspace for all, so a larger problem's leftovers are reused.
+    #[test]
+    fn the_column_sweeps_are_the_textbook_loops_to_the_bit() {
+        let mut rng = Lcg(16);
+        let mut lemke = Lemke::new();
+        let mut solved = 0;
+        for case in 0..400 {
+            let (m, q) = if case % 4 == 3 {
+                let n = 1 + (rng.unit() * 30.0) as usize;
+                let m = DMatrix::from_fn(n, n, |_, _| rng.next());
+                (m, DVector::from_fn(n, |_, _| rng.next()))
+            } else {
+                let c = 1 + (rng.unit() * 12.0) as usize;
+                let dof = 1 + (rng.unit() * (2 * c) as Real) as usize;
+                contact_lcp(&mut rng, c, dof)
+            };
+            let cover: Vec<Real> = (0..q.len()).map(|_| 0.01 + 10.0 * rng.unit()).collect();
+            for d in [None, Some(&cover[..])] {
+                let (status, z, w) = Textbook::solve(&m, &q, d);
+                assert_eq!(lemke.solve_covered(&m, &q, d), Ok(status), "case {case}");
+                if let LemkeStatus::Solved { pivots } = status {
+                    solved += usize::from(pivots > 0);
+                    let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(lemke.z()), bits(&z), "case {case}: z");
+                    assert_eq!(bits(lemke.w()), bits(&w), "case {case}: w");
+                }
+            }
+        }
+        // The comparison is not vacuous: most paths pivot and solve.
+        assert!(solved > 400, "{solved} solved paths with pivots");
     }
 }
