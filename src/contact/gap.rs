@@ -292,11 +292,9 @@ fn closest_points_fallback(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::manifold::tests::bitwise;
+    use crate::contact::manifold::tests::{bitwise, polygonal_shapes};
     use crate::linalg::tests::Lcg;
-    use parry2d_f64::shape::{
-        Ball, Capsule, ConvexPolygon, Cuboid, RoundShape, Segment, SharedShape, Triangle,
-    };
+    use parry2d_f64::shape::{Ball, SharedShape};
 
     /// [`halfspace_contact`] gives the contact of `kept::contact` (parry's dispatch) to the
     /// bit — `Debug` strings equal, `−0` told from `0`, `None` where it gives `None` — for a
@@ -306,32 +304,11 @@ mod tests {
     /// predictions).
     #[test]
     fn halfspace_contact_is_the_query_s() {
-        let pentagon: Vec<Vec2> = (0..5)
-            .map(|k| {
-                let a = 0.3 + k as Real * std::f64::consts::TAU / 5.0;
-                Vec2::new(0.7 * a.cos(), 0.5 * a.sin())
-            })
+        // A ball (no polygonal shape, but a support map), then the polygonal shapes.
+        let ball = SharedShape::new(Ball::new(0.35));
+        let shapes: Vec<SharedShape> = std::iter::once(ball)
+            .chain(polygonal_shapes().into_iter().map(|(_, shape)| shape))
             .collect();
-        let shapes: Vec<SharedShape> = vec![
-            SharedShape::new(Ball::new(0.35)),
-            SharedShape::new(Segment::new(Vec2::new(0.0, 0.0), Vec2::new(0.3, -2.0))),
-            SharedShape::new(Cuboid::new(Vec2::new(0.4, 0.25))),
-            SharedShape::new(Triangle::new(
-                Vec2::new(-0.5, -0.2),
-                Vec2::new(0.6, -0.3),
-                Vec2::new(0.1, 0.8),
-            )),
-            SharedShape::new(ConvexPolygon::from_convex_hull(&pentagon).unwrap()),
-            SharedShape::new(Capsule::new(
-                Vec2::new(-0.6, 0.0),
-                Vec2::new(0.6, 0.1),
-                0.15,
-            )),
-            SharedShape::new(RoundShape {
-                inner_shape: Cuboid::new(Vec2::new(0.3, 0.2)),
-                border_radius: 0.05,
-            }),
-        ];
         let plane = HalfSpace::new(Vec2::new(0.6, 0.8));
         let pose_h = Pose::new(Vec2::new(0.3, -0.7), 0.2);
         let mut rng = Lcg(11);

@@ -401,22 +401,17 @@ pub(crate) mod tests {
         format!("{a:?}") == format!("{b:?}")
     }
 
-    /// [`plane_points`] gives the points of parry's dispatcher and manifold
-    /// ([`query_points`], in the same order) to the bit, for every polygonal shape it takes
-    /// (a segment, a cuboid, a triangle, a convex pentagon, a capsule, a rounded cuboid) on
-    /// a tilted half-space, at 20,000 random poses each: turns of `±π` (a box's support
-    /// face changes at every 90°), heights from inside the half-space to beyond the
-    /// tolerance. Where the query finds no point within the tolerance, it gives none (the
-    /// caller's fallback).
-    #[test]
-    fn plane_points_are_the_query_s() {
+    /// The polygonal shapes of the contact tests, named: a segment, a cuboid, a triangle, a
+    /// convex pentagon, a capsule and a rounded cuboid (`plane_points_are_the_query_s`,
+    /// `gap::tests::halfspace_contact_is_the_query_s`).
+    pub(crate) fn polygonal_shapes() -> Vec<(&'static str, SharedShape)> {
         let pentagon: Vec<Vec2> = (0..5)
             .map(|k| {
                 let a = 0.3 + k as Real * std::f64::consts::TAU / 5.0;
                 Vec2::new(0.7 * a.cos(), 0.5 * a.sin())
             })
             .collect();
-        let shapes: Vec<(&str, SharedShape)> = vec![
+        vec![
             (
                 "segment",
                 SharedShape::new(Segment::new(Vec2::new(0.0, 0.0), Vec2::new(0.3, -2.0))),
@@ -452,7 +447,19 @@ pub(crate) mod tests {
                     border_radius: 0.05,
                 }),
             ),
-        ];
+        ]
+    }
+
+    /// [`plane_points`] gives the points of parry's dispatcher and manifold
+    /// ([`query_points`], in the same order) to the bit, for every polygonal shape it takes
+    /// (a segment, a cuboid, a triangle, a convex pentagon, a capsule, a rounded cuboid) on
+    /// a tilted half-space, at 20,000 random poses each: turns of `±π` (a box's support
+    /// face changes at every 90°), heights from inside the half-space to beyond the
+    /// tolerance. Where the query finds no point within the tolerance, it gives none (the
+    /// caller's fallback).
+    #[test]
+    fn plane_points_are_the_query_s() {
+        let shapes = polygonal_shapes();
         let plane = SharedShape::new(HalfSpace::new(Vec2::new(0.0, 1.0)));
         let pose_b = Pose::new(Vec2::new(0.3, -0.7), 0.2);
         let mut rng = Lcg(7);

@@ -1067,6 +1067,20 @@ mod tests {
     use crate::kinematics::forward_kinematics;
     use crate::sim::{MaterialOverride, Simulation};
 
+    /// The bundled scene `name`, its simulation's scales, and its kinematics at the initial
+    /// state.
+    fn at_start(name: &str) -> (crate::scene::Scene, Scales, Data) {
+        let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let scene = crate::scene::load(std::path::Path::new(&path)).unwrap();
+        let model = &scene.model;
+        let sim = Simulation::new(model, &scene.settings, MaterialOverride::default());
+        let scales = sim.unwrap().scales();
+        let mut data = Data::new(model);
+        let (q0, u0) = (&scene.initial.q, &scene.initial.u);
+        forward_kinematics(model, &mut data, 0.0, q0.as_slice(), u0.as_slice()).unwrap();
+        (scene, scales, data)
+    }
+
     /// The exact velocity products of vertices on the floor ([`Persistent::vertex_products`])
     /// agree with the central differences ([`Persistent::velocity_products`]) at states
     /// around the scenes' initial contacts, with speeds of up to 3 (rad/s, m/s): a
@@ -1074,14 +1088,9 @@ mod tests {
     #[test]
     fn vertex_products_agree_with_the_differences() {
         for name in ["kane_double_pendulum", "rocking_block", "painleve_rod"] {
-            let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-            let scene = crate::scene::load(std::path::Path::new(&path)).unwrap();
+            let (scene, scales, mut data) = at_start(name);
             let model = &scene.model;
-            let sim = Simulation::new(model, &scene.settings, MaterialOverride::default());
-            let scales = sim.unwrap().scales();
-            let mut data = Data::new(model);
             let (q0, u0) = (&scene.initial.q, &scene.initial.u);
-            forward_kinematics(model, &mut data, 0.0, q0.as_slice(), u0.as_slice()).unwrap();
             // The contact points of every pair at the initial state, as closed points.
             let mut ws = ManifoldWorkspace::default();
             let mut closed = Vec::new();
@@ -1154,14 +1163,9 @@ mod tests {
             "rimless_wheel",
             "falling_rod",
         ] {
-            let path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-            let scene = crate::scene::load(std::path::Path::new(&path)).unwrap();
-            let model = &scene.model;
-            let sim = Simulation::new(model, &scene.settings, MaterialOverride::default());
-            let tolerance = sim.unwrap().scales().length;
-            let mut data = Data::new(model);
+            let (scene, scales, mut data) = at_start(name);
+            let (model, tolerance) = (&scene.model, scales.length);
             let (q0, u0) = (&scene.initial.q, &scene.initial.u);
-            forward_kinematics(model, &mut data, 0.0, q0.as_slice(), u0.as_slice()).unwrap();
             // Every vertex of the support features at the start, as a closed point.
             let mut ws = ManifoldWorkspace::default();
             let mut closed = Vec::new();
