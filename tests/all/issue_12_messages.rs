@@ -208,3 +208,73 @@ fn a_closed_standard_output_is_not_an_error() {
     assert!(ricochet::log::read(dir.join("ball.mcap")).is_ok());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Standard error closed (`2>&1 | head -1`, a reader gone): the warnings printed during a
+/// run (and `impact`'s count of failed lines) were `eprintln!`, which panicked on the
+/// closed pipe and killed the run with exit 101 at its first warning. Now the run goes on
+/// to its end, writes the same log as with standard error open, and exits as it would have.
+#[test]
+fn a_closed_standard_error_is_not_an_error() {
+    let dir = temp_dir("stderr");
+    let run = |closed: bool, log: &str| {
+        let mut child = Command::new(BIN)
+            .args(["run", &scene("chain_floor").display().to_string()])
+            .args(["--t-end", "0.46", "-o", log])
+            .current_dir(&dir)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stderr = String::new();
+        if closed {
+            drop(child.stdout.take());
+            drop(child.stderr.take());
+        } else {
+            let mut stdout = String::new();
+            child
+                .stdout
+                .take()
+                .unwrap()
+                .read_to_string(&mut stdout)
+                .unwrap();
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_string(&mut stderr)
+                .unwrap();
+        }
+        (child.wait().unwrap().code(), stderr)
+    };
+    // Open: the run warns on standard error (else this test could not fail) and ends well.
+    let (code, stderr) = run(false, "open.mcap");
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stderr.contains("t = 0.44"), "{stderr}");
+    // Closed: the same exit status and the same log, byte for byte.
+    let (code, _) = run(true, "closed.mcap");
+    assert_eq!(code, Some(0));
+    let open = std::fs::read(dir.join("open.mcap")).unwrap();
+    let closed = std::fs::read(dir.join("closed.mcap")).unwrap();
+    assert!(open == closed, "the logs differ");
+    assert!(ricochet::log::read(dir.join("closed.mcap")).is_ok());
+
+    // `impact`: one bad line; its count goes to standard error, closed here: exit 1.
+    let mut child = Command::new(BIN)
+        .arg("impact")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    {
+        use std::io::Write;
+        let mut stdin = child.stdin.take().unwrap();
+        // A closed stdout may end the command before it reads everything: ignore EPIPE.
+        let _ = stdin.write_all(b"not json\n");
+    }
+    assert_eq!(child.wait().unwrap().code(), Some(1));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -24,6 +24,8 @@ use ricochet::workprec::sweep::{self, Method};
 use ricochet::workprec::table::{self, ChainRow, FloorRow, Row};
 use ricochet::workprec::{Trace, chain};
 
+use crate::output::say;
+
 /// Options of `ricochet bench`.
 #[derive(clap::Args)]
 pub struct Args {
@@ -165,9 +167,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut notes = String::new();
     if !cfg!(feature = "rapier") {
-        println!(
+        say!(
             "rapier2d is not compiled in (build with --features rapier): ricochet's methods only"
-        );
+        )?;
     }
     if !args.no_workprec {
         let mut rows = Vec::new();
@@ -182,7 +184,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         let path = args.out.join("workprec.csv");
         table::write(&path, &rows)?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display())?;
     }
     if !args.no_chain {
         chain_scaling(&scenes_dir, &args, &mut notes)?;
@@ -192,13 +194,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let csv = args.out.join("chain_floor.csv");
         let rows: Vec<FloorRow> = table::read(&csv)?;
         for line in floor_summary(&rows) {
-            println!("  {line}");
+            say!("  {line}")?;
         }
         floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
-        println!(
+        say!(
             "redrew chain_floor_scaling.svg and chain_floor_per_step.svg from {}",
             csv.display()
-        );
+        )?;
     } else if args.floor {
         let mut lines = String::new();
         floor_scaling(&args, &mut lines)?;
@@ -222,7 +224,7 @@ fn workprec(
     let mut scene = ricochet::scene::load(dir.join(format!("{}.toml", case.name)))?;
     scene.settings.t_end = case.t_end;
     let (reference, ref_name) = reference_of(&scene, notes)?;
-    println!(
+    say!(
         "\n{} to {} s, {} impacts compared, reference {ref_name}: impacts at {}",
         case.name,
         case.t_end,
@@ -233,7 +235,7 @@ fn workprec(
             .map(|i| format!("{:.6}", i.t))
             .collect::<Vec<_>>()
             .join(", ")
-    );
+    )?;
     if reference.impacts.len() < case.impacts {
         bail!(
             "{}: the reference has {} impacts, fewer than the {} compared",
@@ -251,7 +253,7 @@ fn workprec(
             else {
                 continue;
             };
-            println!(
+            say!(
                 "  {:<12} {}={:<8.0e} wall {:>10.3e} s  steps {:>8}  rhs {:>8}  impacts {:>3}  \
                  err t {:.2e}  v {:.2e}  E {:.2e}  end {:.2e}  {}",
                 row.method,
@@ -266,7 +268,7 @@ fn workprec(
                 row.err_energy,
                 row.err_end_state,
                 row.stop
-            );
+            )?;
             rows.push(row);
         }
     }
@@ -303,7 +305,7 @@ fn workprec(
         Method::Dop853,
     ] {
         if let Some(line) = equal_wall_ratio(&rows, other, "velocity") {
-            println!("  {}: {line}", case.name);
+            say!("  {}: {line}", case.name)?;
             let _ = writeln!(notes, "{}: {line}", case.name);
         }
     }
@@ -319,7 +321,7 @@ fn workprec(
                 method.name(),
                 2.0 / wall
             );
-            println!("  {line}");
+            say!("  {line}")?;
             let _ = writeln!(notes, "{line}");
         }
     }
@@ -368,7 +370,7 @@ fn reference_of(scene: &Scene, notes: &mut String) -> anyhow::Result<(Trace, Str
             (got.v_s[1].abs() - first.v_s[1].abs()).abs(),
             (got.energy_after - first.energy_after).abs()
         );
-        println!("{line}");
+        say!("{line}")?;
         let _ = writeln!(notes, "{line}");
     }
     Ok((tight, format!("dopri5 rtol {TIGHT_RTOL:.0e}")))
@@ -440,7 +442,7 @@ fn rapier_run(scene: &Scene, dt: Real, repeats: usize) -> anyhow::Result<Option<
     let mut world = match RapierWorld::new(scene, dt) {
         Ok(w) => w,
         Err(e) => {
-            println!("  rapier: {e}");
+            say!("  rapier: {e}")?;
             return Ok(None);
         }
     };
@@ -519,14 +521,14 @@ fn chain_scaling(dir: &Path, args: &Args, notes: &mut String) -> anyhow::Result<
     let path = dir.join("chain.toml");
     let mut rows: Vec<ChainRow> = Vec::new();
     let mut links = 1;
-    println!(
+    say!(
         "\nchain, DOPRI5 at the scene's tolerances, to {} s:",
         args.chain_t_end
-    );
+    )?;
     while links <= args.max_links {
         let repeats = if links >= 16 { 3 } else { args.repeats };
         let r = chain::measure(&path, links, args.chain_t_end, repeats)?;
-        println!(
+        say!(
             "  {:>2} links, {:>3} pairs: {:.3e} wall s per simulated s ({}), {} steps \
              ({} rejected), {} rhs, {} events, {} impacts; rhs {:.2e} s each = {:.0} % of \
              the run; all gaps {:.2e} s",
@@ -542,7 +544,7 @@ fn chain_scaling(dir: &Path, args: &Args, notes: &mut String) -> anyhow::Result<
             r.rhs_eval_s,
             100.0 * r.rhs_share,
             r.gaps_eval_s
-        );
+        )?;
         rows.push(r);
         links *= 2;
     }
@@ -556,7 +558,7 @@ fn chain_scaling(dir: &Path, args: &Args, notes: &mut String) -> anyhow::Result<
         "chain: wall time per simulated second ∝ links^{p_all:.2} over all, \
          ^{p_big:.2} over the three largest"
     );
-    println!("  {line}");
+    say!("  {line}")?;
     let _ = writeln!(notes, "{line}");
     let csv = args.out.join("chain.csv");
     table::write(&csv, &rows)?;
@@ -587,7 +589,7 @@ fn chain_scaling(dir: &Path, args: &Args, notes: &mut String) -> anyhow::Result<
         },
         &series,
     )?;
-    println!("wrote {} and chain_scaling.svg", csv.display());
+    say!("wrote {} and chain_scaling.svg", csv.display())?;
     Ok(())
 }
 
@@ -603,17 +605,18 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
         window: args.floor_window,
         budget: args.floor_budget,
     };
-    println!(
+    say!(
         "\nrope on the floor, DOPRI5 at the scene's tolerances, {} s after the first impact, \
          budget {} s of wall time per size:",
-        settings.window, settings.budget
-    );
+        settings.window,
+        settings.budget
+    )?;
     let mut rows: Vec<FloorRow> = Vec::new();
     let mut readings: Vec<Vec<(Real, Real)>> = Vec::new();
     for &links in &sizes {
         let mut r = Vec::new();
         let row = chain_floor::measure(links, settings, &mut r)?;
-        println!(
+        say!(
             "  {:>3} links: first impact at {} s after {:.3e} s of wall ({} steps); window \
              reached {:.4} s of {} in {:.3e} s of wall: {:.3e} wall s ({} CPU s) per \
              simulated s{}; {} steps ({} rejected), {} rhs, {} events, {} impacts at {} \
@@ -645,7 +648,7 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
             row.max_closed_pairs,
             row.stop,
             row.load_before.map_or("?".into(), |l| l.to_string())
-        );
+        )?;
         rows.push(row);
         readings.push(r);
     }
@@ -654,14 +657,14 @@ fn floor_scaling(args: &Args, notes: &mut String) -> anyhow::Result<()> {
     table::write(&csv, &rows)?;
     let lines = floor_summary(&rows);
     for line in &lines {
-        println!("  {line}");
+        say!("  {line}")?;
         let _ = writeln!(notes, "{line}");
     }
     floor_chart(&args.out.join("chain_floor_scaling.svg"), &rows)?;
-    println!(
+    say!(
         "wrote {}, chain_floor_scaling.svg and chain_floor_per_step.svg",
         csv.display()
-    );
+    )?;
     Ok(())
 }
 
@@ -937,7 +940,7 @@ fn machine(out: &Path, main: Option<&str>, floor: Option<&str>) -> anyhow::Resul
         text.push_str(&floor);
     }
     std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?;
-    println!("wrote {}", path.display());
+    say!("wrote {}", path.display())?;
     Ok(())
 }
 

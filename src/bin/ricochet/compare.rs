@@ -8,6 +8,8 @@ use std::process::ExitCode;
 use ricochet::math::Real;
 use ricochet::regress::{Tolerances, compare, read_run};
 
+use crate::output::tell;
+
 /// Options of `ricochet compare`.
 #[derive(clap::Args)]
 pub struct Args {
@@ -36,7 +38,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match compare_runs(&args) {
         Ok(code) => Ok(code),
         Err(err) => {
-            eprintln!("error: {err:#}");
+            tell!("error: {err:#}");
             Ok(ExitCode::from(2))
         }
     }

@@ -13,6 +13,8 @@ use ricochet::math::Real;
 use ricochet::regress::golden::{self, Checked};
 use ricochet::regress::{DEFAULT_CHECKPOINTS, Tolerances};
 
+use crate::output::tell;
+
 /// `println!` through an [`Out`].
 macro_rules! say {
     ($out:expr, $($arg:tt)*) => {
@@ -84,7 +86,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match result {
         Ok(code) => Ok(code),
         Err(err) => {
-            eprintln!("error: {err:#}");
+            tell!("error: {err:#}");
             Ok(ExitCode::from(2))
         }
     }

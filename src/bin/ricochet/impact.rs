@@ -11,6 +11,8 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use ricochet::impact::{self, ContactVelocity, ImpactMatrix, ImpactProblem, Law, Outcome};
+
+use crate::output::tell;
 use serde::{Deserialize, Serialize};
 
 /// Options of `ricochet impact`.
@@ -247,7 +249,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 /// The exit status after `failed` failed lines (said on standard error).
 fn status(failed: usize) -> ExitCode {
     if failed > 0 {
-        eprintln!("ricochet impact: {failed} line(s) failed");
+        tell!("ricochet impact: {failed} line(s) failed");
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS

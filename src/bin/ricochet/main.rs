@@ -90,7 +90,7 @@ fn main() -> ExitCode {
             // The chain of causes, each said once (layers that print their cause and
             // also return it as their source would repeat it).
             let messages = err.chain().map(ToString::to_string);
-            eprintln!("error: {}", ricochet::sim::describe_messages(messages));
+            output::tell!("error: {}", ricochet::sim::describe_messages(messages));
             ExitCode::FAILURE
         }
     }

@@ -10,6 +10,8 @@ use ricochet::impact::{ImpactMatrix, Law};
 use ricochet::regions::{self, Axis, MapSpec, Marker, RegionMap};
 use ricochet::scene;
 
+use crate::output::tell;
+
 /// Options of `ricochet regions`.
 #[derive(clap::Args)]
 #[command(group = clap::ArgGroup::new("source").required(true).args(["w", "scene"]))]
@@ -114,9 +116,17 @@ fn source(args: &Args) -> anyhow::Result<(String, ImpactMatrix, f64, Vec<Marker>
     let c = regions::scene_contact(&scene.model, &scene.initial, args.pair.as_deref())
         .with_context(|| format!("{}: the contact at the initial state", path.display()))?;
     let e = args.e.unwrap_or(c.material.e);
-    eprintln!(
+    tell!(
         "{}: pair {} (gap {:.3e} m), W = [{}, {}, {}], v = ({}, {}) m/s, e = {e}, μ = {}",
-        scene.name, c.name, c.gap, c.w.nn, c.w.nt, c.w.tt, c.v.n, c.v.t, c.material.mu
+        scene.name,
+        c.name,
+        c.gap,
+        c.w.nn,
+        c.w.nt,
+        c.w.tt,
+        c.v.n,
+        c.v.t,
+        c.material.mu
     );
     let markers = match c.alpha() {
         Some(alpha) => vec![Marker {

@@ -21,6 +21,8 @@ use ricochet::sim::{
     Simulation, StopReason,
 };
 
+use crate::output::tell;
+
 /// Options of `ricochet run`.
 #[derive(clap::Args)]
 pub struct Args {
@@ -200,7 +202,7 @@ impl<W: Write + Seek + Send + 'static> Observer for Terminal<W> {
             let line = format!("t = {t:.6} s: {text}");
             match &self.progress {
                 Some(bar) => bar.println(line),
-                None => eprintln!("{line}"),
+                None => tell!("{line}"),
             }
         }
         self.log.message(t, level, text)
@@ -311,7 +313,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let broken = drift.filter(|d| d.broken());
     if let Some(d) = broken {
-        eprintln!("error: the energy-drift budget is broken: {}", d.describe());
+        tell!("error: the energy-drift budget is broken: {}", d.describe());
     }
     Ok(match summary.stop {
         StopReason::EndTime if broken.is_some() => ExitCode::FAILURE,

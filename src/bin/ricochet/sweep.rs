@@ -17,6 +17,7 @@ use ricochet::sweep::{
     Grid, ParamSpec, Shard, Sweep, Table, merge, read_table, thread_pool, write_table,
 };
 
+use crate::output::tell;
 use crate::run::{SIGHUP, SIGTERM, install_interrupt, interrupted_status};
 
 /// Options of `ricochet sweep`.
@@ -148,7 +149,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         output.display()
     ))?;
     if let Some(why) = &header.incomplete {
-        eprintln!(
+        tell!(
             "{}: {why}; the table holds those runs and is marked incomplete (`--merge` \
              refuses it: run the shard again)",
             output.display()
@@ -157,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     let failed = rows.iter().filter(|r| r.stop() != END_TIME).count();
     if failed > 0 {
-        eprintln!(
+        tell!(
             "{failed} of {} runs failed (stop = error or panic): their rows say why (stop_detail)",
             rows.len()
         );
