@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::scale::{Factors, Scale};
-use crate::math::Real;
+use crate::math::{Real, Shown};
 
 /// The 2×2 matrix `W = [[m_nn, m_nt], [m_nt, m_tt]]` of [P, Eq. (20)], mapping the
 /// impulses `(I_n, I_t)` to the jump of the contact velocity: `v^S − v^A = W I`
@@ -130,7 +130,8 @@ pub enum ImpactError {
     /// `W` is not symmetric positive semidefinite with `m_nn > 0`.
     #[error(
         "W is not positive semidefinite with m_nn > 0: m_nn = {nn}, m_nt = {nt}, m_tt = {tt}, \
-         Δ = m_nn m_tt − m_nt² = {det}"
+         Δ = m_nn m_tt − m_nt² = {det}",
+        nn = Shown(*.nn), nt = Shown(*.nt), tt = Shown(*.tt), det = Shown(*.det)
     )]
     NotPositiveDefinite {
         /// `m_nn`.
@@ -143,19 +144,19 @@ pub enum ImpactError {
         det: Real,
     },
     /// The points do not approach: `v_n^A ≥ 0`.
-    #[error("the points do not approach: v_n^A = {vn} must be negative")]
+    #[error("the points do not approach: v_n^A = {vn} must be negative", vn = Shown(*.vn))]
     NotApproaching {
         /// `v_n^A` (m/s).
         vn: Real,
     },
     /// `e` outside `[0, 1]`.
-    #[error("the coefficient of restitution e = {e} is outside [0, 1]")]
+    #[error("the coefficient of restitution e = {e} is outside [0, 1]", e = Shown(*.e))]
     RestitutionOutOfRange {
         /// `e`.
         e: Real,
     },
     /// `μ < 0`.
-    #[error("the coefficient of friction μ = {mu} is negative")]
+    #[error("the coefficient of friction μ = {mu} is negative", mu = Shown(*.mu))]
     NegativeFriction {
         /// `μ`.
         mu: Real,

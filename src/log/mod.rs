@@ -62,7 +62,10 @@ pub use writer::{Compression, LogOptions, LogWriter};
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {
     /// A simulated time that cannot stamp a message.
-    #[error("invalid simulated time {t} s: log times must be finite, ≥ 0 and < 2³² s")]
+    #[error(
+        "invalid simulated time {t} s: log times must be finite, ≥ 0 and < 2³² s",
+        t = crate::math::Shown(*.t)
+    )]
     InvalidTime {
         /// The time (s).
         t: f64,

@@ -1,6 +1,6 @@
 //! Errors found while building a [`super::Model`].
 
-use crate::math::Real;
+use crate::math::{Real, Shown};
 
 /// A model that cannot be built, with the evidence.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -14,7 +14,7 @@ pub enum ModelError {
         name: String,
     },
     /// A body's mass is not a positive finite number.
-    #[error("body `{body}`: the mass must be positive and finite, got {mass} kg")]
+    #[error("body `{body}`: the mass must be positive and finite, got {mass} kg", mass = Shown(*.mass))]
     BadMass {
         /// The body.
         body: String,
@@ -23,7 +23,8 @@ pub enum ModelError {
     },
     /// A body's moment of inertia is not a positive finite number.
     #[error(
-        "body `{body}`: the moment of inertia must be positive and finite, got {inertia} kg·m²"
+        "body `{body}`: the moment of inertia must be positive and finite, got {inertia} kg·m²",
+        inertia = Shown(*.inertia)
     )]
     BadInertia {
         /// The body.
@@ -52,7 +53,10 @@ pub enum ModelError {
         child: usize,
     },
     /// A prismatic joint's axis is zero or not finite.
-    #[error("joint `{joint}`: the prismatic axis must be a finite non-zero vector, got ({x}, {y})")]
+    #[error(
+        "joint `{joint}`: the prismatic axis must be a finite non-zero vector, got ({x}, {y})",
+        x = Shown(*.x), y = Shown(*.y)
+    )]
     BadAxis {
         /// The joint.
         joint: String,
@@ -80,7 +84,7 @@ pub enum ModelError {
         reason: &'static str,
     },
     /// A negative spring stiffness or damping coefficient.
-    #[error("joint `{joint}`: {what} must be non-negative, got {value}")]
+    #[error("joint `{joint}`: {what} must be non-negative, got {value}", value = Shown(*.value))]
     NegativeCoefficient {
         /// The joint.
         joint: String,
@@ -114,7 +118,10 @@ pub enum ModelError {
         reason: &'static str,
     },
     /// A material coefficient out of range.
-    #[error("contact pair `{a}`–`{b}`: {what} = {value} is out of range ({range})")]
+    #[error(
+        "contact pair `{a}`–`{b}`: {what} = {value} is out of range ({range})",
+        value = Shown(*.value)
+    )]
     BadMaterial {
         /// First collider.
         a: String,

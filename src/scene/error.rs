@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use toml::de::{DeTable, DeValue};
 
+use crate::math::Shown;
 use crate::model::ModelError;
 
 /// A scene that cannot be loaded.
@@ -95,8 +96,32 @@ impl Locator<'_> {
 
     /// A located error from a TOML parse or deserialization error.
     pub fn toml(&self, err: &toml::de::Error) -> SceneError {
-        self.at(err.span().unwrap_or(0..0), err.message().trim_end())
+        self.at(
+            err.span().unwrap_or(0..0),
+            shown_floats(err.message().trim_end()),
+        )
     }
+}
+
+/// `message` with the numbers that serde quotes as ``floating point `…` `` shown as
+/// [`Shown`] does: serde writes every digit (`1e308` as 309 of them), while the file said
+/// `1e308`.
+fn shown_floats(message: &str) -> String {
+    const QUOTE: &str = "floating point `";
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(i) = rest.find(QUOTE) {
+        let (head, tail) = rest.split_at(i + QUOTE.len());
+        out.push_str(head);
+        let end = tail.find('`').unwrap_or(tail.len());
+        match tail[..end].parse::<f64>() {
+            Ok(x) => out.push_str(&Shown(x).to_string()),
+            Err(_) => out.push_str(&tail[..end]),
+        }
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// The dotted path of the innermost key or value of `text` that contains the byte

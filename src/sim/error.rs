@@ -118,7 +118,10 @@ pub enum SimError {
     #[error(transparent)]
     Settings(#[from] SettingsError),
     /// A material override is out of range.
-    #[error("the override of {what} = {value} is out of range (e ∈ [0, 1], μ ≥ 0)")]
+    #[error(
+        "the override of {what} = {value} is out of range (e ∈ [0, 1], μ ≥ 0)",
+        value = crate::math::Shown(*.value)
+    )]
     Override {
         /// `e` or `mu`.
         what: &'static str,

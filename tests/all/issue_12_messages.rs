@@ -278,3 +278,42 @@ fn a_closed_standard_error_is_not_an_error() {
     assert_eq!(child.wait().unwrap().code(), Some(1));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Numbers in messages are short and exact: `{}` of a double writes `1e-300` with 300
+/// zeros (an `impact` line with `v_n^A = 1e-300` said so in 320 characters).
+#[test]
+fn numbers_in_messages_are_short_and_exact() {
+    use ricochet::model::ModelError;
+    let cases = [
+        (
+            ImpactError::NotApproaching { vn: 1e-300 }.to_string(),
+            "the points do not approach: v_n^A = 1e-300 must be negative",
+        ),
+        (
+            ImpactError::NotPositiveDefinite {
+                nn: -1e200,
+                nt: 0.5,
+                tt: 2.0,
+                det: -2e200,
+            }
+            .to_string(),
+            "W is not positive semidefinite with m_nn > 0: m_nn = -1e200, m_nt = 0.5, \
+             m_tt = 2, Δ = m_nn m_tt − m_nt² = -2e200",
+        ),
+        (
+            ImpactError::RestitutionOutOfRange { e: 1.0000001 }.to_string(),
+            "the coefficient of restitution e = 1.0000001 is outside [0, 1]",
+        ),
+        (
+            ModelError::BadMass {
+                body: "b".into(),
+                mass: 5e-324,
+            }
+            .to_string(),
+            "body `b`: the mass must be positive and finite, got 5e-324 kg",
+        ),
+    ];
+    for (shown, expected) in cases {
+        assert_eq!(shown, expected);
+    }
+}

@@ -733,6 +733,14 @@ fn bad_scenes_are_rejected_with_the_field_and_its_line() {
             "a name must be printable",
         ),
         bad(
+            // serde quotes the number with all its 309 digits; the file said 1e308.
+            "a huge number for a name",
+            &[("name = \"base\"", "name = 1e308")],
+            "name = 1e308",
+            "name",
+            "invalid type: floating point `1e308`, expected a string",
+        ),
+        bad(
             "a slash in an obstacle's name",
             &[("name = \"floor\"", "name = \"../floor\"")],
             "../floor",
