@@ -580,6 +580,89 @@ mod tests {
         log.finish(&summary).expect("finished").into_inner()
     }
 
+    /// A sample whose poses hold a NaN or an infinity meets the same outcome whether the
+    /// `/tf` poses would go to the writer thread as numbers or be encoded here: a NaN
+    /// position is refused with the same error (naming the transform's field), at the same
+    /// call; an infinite rotation part (a finite angle, `atan2`) is written as before.
+    /// Either way the log holds the same bytes.
+    #[test]
+    fn non_finite_poses_meet_the_same_outcome_either_way() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes/kane_double_pendulum.toml");
+        let s = crate::scene::load(&path).expect("a bundled scene");
+        let over = MaterialOverride::default();
+        let gap_tol = Simulation::new(&s.model, &s.settings, over)
+            .expect("a run")
+            .scales()
+            .gap_tol;
+        let poses_of = |k: usize| {
+            let mut poses = [Pose::identity(); 2];
+            poses[1].translation.x = 0.5;
+            match k {
+                0 => poses[0].translation.x = f64::NAN,
+                1 => poses[1].translation.y = f64::INFINITY,
+                2 => poses[1].rotation.re = f64::INFINITY,
+                3 => poses[0].rotation.im = f64::NEG_INFINITY,
+                _ => {}
+            }
+            poses
+        };
+        let run = |defer: Option<bool>| {
+            let mut writer = LogWriter::new(Cursor::new(Vec::new()), Default::default())
+                .expect("a log in memory");
+            writer.defer_samples(defer);
+            let mut log = RunLogger::new(
+                writer,
+                &s.model,
+                (&s.name, &s.text),
+                (&s.settings, &over),
+                &s.initial,
+                gap_tol,
+            )
+            .expect("a logger");
+            let (q, u) = (s.initial.q.as_slice(), s.initial.u.as_slice());
+            let outcomes: Vec<String> = (0..6)
+                .map(|k| {
+                    let poses = poses_of(k);
+                    let sample = Sample {
+                        t: 0.01 * k as f64,
+                        q,
+                        u,
+                        energy: crate::dynamics::Energy {
+                            kinetic: 1.0,
+                            potential: -2.0,
+                        },
+                        pairs: &[],
+                        gaps: &[],
+                        poses: &poses,
+                        at_impact: false,
+                        modes: &[],
+                        slips: &[],
+                    };
+                    match log.sample(&s.model, &sample) {
+                        Ok(()) => "ok".to_owned(),
+                        Err(e) => crate::sim::describe(&*e),
+                    }
+                })
+                .collect();
+            let bytes = log.writer.finish().expect("finished").into_inner();
+            (outcomes, bytes)
+        };
+        let (here, here_bytes) = run(Some(false));
+        assert!(
+            here[0].contains("non-finite `transforms[0].translation.x` in /tf"),
+            "{here:?}"
+        );
+        assert!(
+            here[1].contains("non-finite `transforms[1].translation.y` in /tf"),
+            "{here:?}"
+        );
+        assert_eq!(here[2..], ["ok", "ok", "ok", "ok"]);
+        let (numbers, numbers_bytes) = run(Some(true));
+        assert_eq!(numbers, here);
+        assert!(numbers_bytes == here_bytes);
+    }
+
     /// A run's log is the same bytes whether its samples (the `/tf` poses among them) go to
     /// the writer thread as numbers, are encoded on the simulation's thread, or either as
     /// the writer thread keeps up: scenes of one to seven bodies, with impacts, sliding
