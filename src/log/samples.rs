@@ -17,13 +17,20 @@
 //! and whenever a sample's layout differs from the last one sent (a pair starts or stops
 //! being listed): a run in its steady state copies numbers only and allocates nothing.
 //!
+//! The `/tf` samples of a run ([`RunLogger`](super::RunLogger)) go as *planar* numbers:
+//! the time, then each body's position and rotation as they are in its pose (`x, y, cos θ,
+//! sin θ`) and the view's; the sink thread computes each rotation's angle and quaternion
+//! (`atan2`, `sin_cos`: ~670 instructions a sample, which the simulation's thread no longer
+//! spends) with the same functions, so the bytes are those the calling thread wrote
+//! ([`apply_planar_words`]).
+//!
 //! Samples go this way while the sink thread keeps up
 //! ([`Sink::defers_samples`](super::sink::Sink::defers_samples)); otherwise the calling
 //! thread encodes them. Only frame transforms whose timestamp, translation and rotation are all present, with a
 //! normalized timestamp (what [`RunLogger`](super::RunLogger) writes), go this way; others
 //! are encoded on the calling thread as before.
 
-use super::foxglove::{FrameTransforms, Quaternion, Timestamp, Vector3};
+use super::foxglove::{FrameTransforms, Quaternion, Timestamp, Vector3, about_z, vector3};
 use super::records::{ContactMode, StateRecord};
 
 /// Whether a sample of layout `a` can be laid out on a record of layout `b`: the same
@@ -154,6 +161,53 @@ pub(super) fn apply_transforms_words(tf: &mut FrameTransforms, words: &[u64]) {
             z: f(),
             w: f(),
         });
+    }
+}
+
+/// Appends the numbers of a planar `/tf` sample (see [`apply_planar_words`]) to `words`:
+/// the time `time` (ns) as its seconds and nanoseconds, then each frame's `[x, y, cos θ,
+/// sin θ]`. Returns `false`, leaving `words` as it was, if a number is not finite (the
+/// caller then writes the sample the slow way, which names the field) or there are not
+/// `n` frames.
+pub(super) fn planar_words(
+    words: &mut Vec<u64>,
+    time: u64,
+    (n, frames): (usize, impl Iterator<Item = [f64; 4]>),
+) -> bool {
+    let start = words.len();
+    words.extend([time / 1_000_000_000, time % 1_000_000_000]);
+    let (mut finite, mut count) = (true, 0);
+    for frame in frames {
+        finite &= frame.iter().all(|x| x.is_finite());
+        words.extend(frame.map(f64::to_bits));
+        count += 1;
+    }
+    let taken = finite && count == n;
+    if !taken {
+        words.truncate(start);
+    }
+    taken
+}
+
+/// Lays the numbers `words` of a planar sample ([`planar_words`], as many frames as `tf`
+/// has transforms) out on `tf`: each transform at the time, its translation `(x, y, 0)`,
+/// its rotation [`about_z`] of the angle of `(cos θ, sin θ)` — the numbers, bit for bit,
+/// that [`RunLogger`](super::RunLogger) computes from a body's pose (`Pose::rotation`'s
+/// `angle()`, `atan2(sin, cos)`), here on the writer thread rather than the simulation's.
+pub(super) fn apply_planar_words(tf: &mut FrameTransforms, words: &[u64]) {
+    let mut w = words.iter().copied();
+    let mut word = || w.next().unwrap_or_default();
+    // Whole seconds below 2³² and nanoseconds below 10⁹ (`nanoseconds` checked the time).
+    let time = Timestamp::new(word() as u32, word() as u32);
+    for t in &mut tf.transforms {
+        let mut f = || f64::from_bits(word());
+        let (x, y, cos, sin) = (f(), f(), f(), f());
+        let mut rotation = crate::math::Pose::identity().rotation;
+        rotation.re = cos;
+        rotation.im = sin;
+        t.timestamp = Some(time);
+        t.translation = Some(vector3(x, y, 0.0));
+        t.rotation = Some(about_z(rotation.angle()));
     }
 }
 
@@ -294,6 +348,99 @@ mod tests {
             append_frame_transforms(&mut ours, &on);
             append_frame_transforms(&mut theirs, &tf);
             assert_eq!(ours, theirs, "{tf:?}");
+        }
+    }
+
+    /// A planar `/tf` sample (poses and view as `[x, y, cos θ, sin θ]`) laid out on the
+    /// writer thread gives the bytes of the transforms the simulation's thread computed
+    /// from the same poses before (`timestamp(t)`, `(x, y, 0)`, `about_z(angle())`): random
+    /// positions (±0.0 included), rotations of any angle (±π, ±0) and not normalized, on
+    /// layouts holding other numbers. A non-finite number, or a frame too many or too few,
+    /// is refused, leaving the words as they were.
+    #[test]
+    fn planar_numbers_give_the_transforms_computed_from_the_poses() {
+        use crate::log::foxglove::{about_z, timestamp, vector3};
+        use crate::math::Pose;
+        let mut bits = Bits(crate::linalg::tests::Lcg(21));
+        let mut words = Vec::new();
+        for k in 0..3000 {
+            let frames = FRAMES[k % 2];
+            let t = [0.0, 0.01 * k as f64, bits.finite().abs() % 4e9][k % 3];
+            let poses: Vec<Pose> = (0..frames.len())
+                .map(|j| {
+                    let mut p = Pose::identity();
+                    p.translation.x = bits.finite();
+                    p.translation.y = bits.finite();
+                    let angle = [
+                        std::f64::consts::PI,
+                        -std::f64::consts::PI,
+                        -0.0,
+                        bits.finite() % 10.0,
+                    ][(k + j) % 4];
+                    let (sin, cos) = angle.sin_cos();
+                    let scale = if k % 5 == 0 { 1.0 + 1e-9 } else { 1.0 };
+                    p.rotation.re = cos * scale;
+                    p.rotation.im = sin;
+                    p
+                })
+                .collect();
+            // What `RunLogger::sample` computed on the simulation's thread.
+            let mut expected = transforms(&mut bits, frames, true);
+            let time = timestamp(t).unwrap();
+            for (tf, p) in expected.transforms.iter_mut().zip(&poses) {
+                tf.timestamp = Some(time);
+                tf.translation = Some(vector3(p.translation.x, p.translation.y, 0.0));
+                tf.rotation = Some(about_z(p.rotation.angle()));
+            }
+            let frame = |p: &Pose| {
+                [
+                    p.translation.x,
+                    p.translation.y,
+                    p.rotation.re,
+                    p.rotation.im,
+                ]
+            };
+            words.clear();
+            words.push(7);
+            let ns = crate::log::foxglove::nanoseconds(t).unwrap();
+            assert!(planar_words(
+                &mut words,
+                ns,
+                (poses.len(), poses.iter().map(frame))
+            ));
+            let mut on = transforms(&mut bits, frames, false);
+            apply_planar_words(&mut on, &words[1..]);
+            let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+            append_frame_transforms(&mut ours, &on);
+            append_frame_transforms(&mut theirs, &expected);
+            assert_eq!(ours, theirs, "{expected:?}");
+
+            // Refused: a non-finite number, too many or too few frames.
+            let mut bad = poses.clone();
+            let j = k % bad.len();
+            match k % 3 {
+                0 => bad[j].translation.y = f64::NAN,
+                1 => bad[j].rotation.re = f64::INFINITY,
+                _ => bad[j].rotation.im = f64::NEG_INFINITY,
+            }
+            let before = words.clone();
+            assert!(!planar_words(
+                &mut words,
+                ns,
+                (bad.len(), bad.iter().map(frame))
+            ));
+            let n = poses.len();
+            assert!(!planar_words(
+                &mut words,
+                ns,
+                (n + 1, poses.iter().map(frame))
+            ));
+            assert!(!planar_words(
+                &mut words,
+                ns,
+                (n - 1, poses.iter().map(frame))
+            ));
+            assert_eq!(words, before);
         }
     }
 

@@ -63,8 +63,8 @@ use super::foxglove::{
 use super::records::{ImpactRecord, StateRecord};
 use super::run::impact_line;
 use super::samples::{
-    apply_state_words, apply_transforms_words, same_state_layout, same_transforms_layout,
-    state_words, transforms_words,
+    apply_planar_words, apply_state_words, apply_transforms_words, planar_words, same_state_layout,
+    same_transforms_layout, state_words, transforms_words,
 };
 use super::schemas::Topic;
 use super::writer::log_message;
@@ -97,6 +97,10 @@ enum Payload {
     State { at: usize, layout: Option<usize> },
     /// A `/tf` sample: likewise, on the sink thread's transforms (`tf_layouts`).
     Transforms { at: usize, layout: Option<usize> },
+    /// A planar `/tf` sample: its time and each frame's position and rotation as a
+    /// complex number from `words[at..]`, laid out on the sink thread's transforms
+    /// (`tf_layouts`, as for `Transforms`) by `samples::apply_planar_words`.
+    Planar { at: usize, layout: Option<usize> },
     /// The ledger entry of impact slot `k` (`/impacts`, JSON).
     Impact(usize),
     /// The arrow of impact slot `k` (`/scene`, protobuf).
@@ -402,6 +406,37 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         self.send_if_full()
     }
 
+    /// Adds the planar `/tf` sample of the transforms `layout` (their frames' names) at
+    /// `time` (ns): each frame's `[x, y, cos θ, sin θ]` from `frames` (one per transform
+    /// of `layout`; the angle, its quaternion and the message computed on the sink
+    /// thread), to be written with `header`. Returns `false`, adding nothing, if a number
+    /// is not finite.
+    pub(super) fn push_planar(
+        &mut self,
+        header: MessageHeader,
+        layout: &FrameTransforms,
+        time: u64,
+        frames: impl Iterator<Item = [f64; 4]>,
+    ) -> Result<bool, LogError> {
+        self.failure.take()?;
+        let batch = &mut self.open;
+        let at = batch.words.len();
+        if !planar_words(&mut batch.words, time, (layout.transforms.len(), frames)) {
+            return Ok(false);
+        }
+        let layout = match &mut self.tf_layout {
+            Some(last) if same_transforms_layout(last, layout) => None,
+            last => {
+                batch.tf_layouts.push(layout.clone());
+                *last = Some(layout.clone());
+                Some(batch.tf_layouts.len() - 1)
+            }
+        };
+        (batch.messages).push((header, Payload::Planar { at, layout }));
+        self.send_if_full()?;
+        Ok(true)
+    }
+
     /// Adds an impact (copied; its three messages encoded on the sink thread) with the
     /// headers of its ledger entry, its arrow and its log line.
     pub(super) fn push_impact(
@@ -629,6 +664,16 @@ impl<W: Write + Seek> Writing<W> {
                     }
                     let tf = self.tf.as_mut().ok_or_else(no_layout)?;
                     apply_transforms_words(tf, batch.words.get(at..).unwrap_or_default());
+                    self.encoded.clear();
+                    append_frame_transforms(&mut self.encoded, tf);
+                    &self.encoded[..]
+                }
+                Payload::Planar { at, layout } => {
+                    if let Some(k) = layout {
+                        self.tf = batch.tf_layouts.get(k).cloned();
+                    }
+                    let tf = self.tf.as_mut().ok_or_else(no_layout)?;
+                    apply_planar_words(tf, batch.words.get(at..).unwrap_or_default());
                     self.encoded.clear();
                     append_frame_transforms(&mut self.encoded, tf);
                     &self.encoded[..]

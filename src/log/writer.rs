@@ -279,6 +279,36 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
         self.push(Topic::Tf, time, start)
     }
 
+    /// Writes the planar frame transforms of `layout` on `/tf` at simulated time `t` (s),
+    /// each frame's numbers `[x, y, cos θ, sin θ]` from `frames` (one per transform of
+    /// `layout`, in order): each transform at time `t`, translated by `(x, y, 0)` and
+    /// rotated by [`about_z`](super::foxglove::about_z)`(atan2(sin θ, cos θ))`, byte for
+    /// byte what [`transforms`](Self::transforms) writes for those transforms. The
+    /// numbers are handed to the writer thread, which computes the rotations and encodes
+    /// the message (issue 16).
+    ///
+    /// Returns `false`, writing nothing, if the writer thread is behind (see
+    /// `Sink::defers_samples`) or a number is not finite: the caller then writes the
+    /// transforms with [`transforms`](Self::transforms), which encodes them on this
+    /// thread or refuses them naming the non-finite field.
+    pub(crate) fn planar_transforms(
+        &mut self,
+        t: f64,
+        layout: &FrameTransforms,
+        frames: impl Iterator<Item = [f64; 4]>,
+    ) -> Result<bool, LogError> {
+        if !self.mcap.defers_samples() {
+            return Ok(false);
+        }
+        let time = nanoseconds(t)?;
+        let header = self.header(Topic::Tf, time);
+        let taken = self.mcap.push_planar(header, layout, time, frames)?;
+        if taken {
+            self.advance(Topic::Tf);
+        }
+        Ok(taken)
+    }
+
     /// Writes a text message on `/log` at simulated time `t` (s), from `ricochet`.
     pub fn log(&mut self, t: f64, level: LogLevel, message: &str) -> Result<(), LogError> {
         self.log_message(&log_message(t, level, message)?)

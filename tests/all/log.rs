@@ -1246,3 +1246,88 @@ fn ricochet_schemas_are_what_foxglove_studio_parses() {
     });
     assert!(std::panic::catch_unwind(|| object(&nullable, "/impacts")).is_err());
 }
+
+/// Forwards to a [`RunLogger`](ricochet::log::RunLogger), counting the allocations its
+/// `sample` makes on the simulation's thread after the first `warm_up` samples.
+struct CountingLogger<W: Write + Seek + Send + 'static> {
+    inner: ricochet::log::RunLogger<W>,
+    warm_up: usize,
+    samples: usize,
+    allocations: u64,
+}
+
+impl<W: Write + Seek + Send + 'static> ricochet::sim::Observer for CountingLogger<W> {
+    fn sample(
+        &mut self,
+        model: &ricochet::model::Model,
+        s: &ricochet::sim::Sample<'_>,
+    ) -> Result<(), ricochet::sim::ObserverError> {
+        let mut result = Ok(());
+        let n = crate::common::alloc::allocations_in(|| result = self.inner.sample(model, s));
+        self.samples += 1;
+        if self.samples > self.warm_up {
+            self.allocations += n;
+        }
+        result
+    }
+    fn impact(
+        &mut self,
+        model: &ricochet::model::Model,
+        impact: &ricochet::sim::ImpactEvent,
+    ) -> Result<(), ricochet::sim::ObserverError> {
+        self.inner.impact(model, impact)
+    }
+    fn message(
+        &mut self,
+        t: f64,
+        level: ricochet::sim::Level,
+        text: &str,
+    ) -> Result<(), ricochet::sim::ObserverError> {
+        self.inner.message(t, level, text)
+    }
+}
+
+/// Logging a sample does not allocate on the simulation's thread once the log is under way
+/// (issue 16): Kane's pendulum, 5 s at 100 Hz (its impacts and accumulation in the first
+/// 0.2 s, then sliding), past its first 100 samples. A sample is handed over as numbers
+/// (or encoded) into a batch whose buffers are reused. What may allocate depends on the
+/// writer thread's progress, not on the samples: a new batch (three buffers) when the
+/// writer thread holds every spare one, at most once per 32 samples, and a reused batch's
+/// bytes growing (by doubling) once the simulation's thread starts encoding samples into
+/// it. An allocation per sample would be 400 here; a few dozen at most are allowed.
+#[test]
+fn a_logged_sample_allocates_nothing_after_warm_up() {
+    use ricochet::sim::{MaterialOverride, Simulation};
+    let mut s =
+        ricochet::scene::load(repo_path("scenes/kane_double_pendulum.toml")).expect("the scene");
+    s.settings.t_end = 5.0;
+    s.settings.output_rate = 100.0;
+    let over = MaterialOverride::default();
+    let mut sim = Simulation::new(&s.model, &s.settings, over).expect("a simulation");
+    let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).expect("a log");
+    let inner = ricochet::log::RunLogger::new(
+        writer,
+        &s.model,
+        (&s.name, &s.text),
+        (&s.settings, &over),
+        &s.initial,
+        sim.scales().gap_tol,
+    )
+    .expect("a logger");
+    let mut log = CountingLogger {
+        inner,
+        warm_up: 100,
+        samples: 0,
+        allocations: 0,
+    };
+    let summary = sim.run(&s.initial, &mut log, None);
+    assert!(log.samples > 500, "{} samples", log.samples);
+    let counted = (log.samples - log.warm_up) as u64;
+    assert!(
+        log.allocations * 8 <= counted,
+        "{} allocations in {counted} samples",
+        log.allocations
+    );
+    eprintln!("{} allocations in {counted} samples", log.allocations);
+    log.inner.finish(&summary).expect("finished");
+}
