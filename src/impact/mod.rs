@@ -31,6 +31,8 @@
 //! ```
 
 mod coefficients;
+#[cfg(test)]
+mod double_double;
 pub mod kane_levinson;
 pub mod newton;
 mod outcome;

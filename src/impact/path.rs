@@ -331,6 +331,25 @@ impl RouthPath {
         self.after
     }
 
+    /// `dv_n/dĨ_n` of the first phase, forward sliding: `h`.
+    #[inline(always)]
+    pub(super) fn slide_dv_n(&self) -> Real {
+        self.slide.dv_n
+    }
+
+    /// `dv_n/dĨ_n` of the phase after G: `q` (reverse sliding), `Δ/m_tt` (sticking), or
+    /// `m_nn` (sticking with `m_tt = 0`).
+    #[inline(always)]
+    pub(super) fn after_dv_n(&self) -> Real {
+        self.after_slope.dv_n
+    }
+
+    /// The point G (meaningful when [`i_g`](Self::i_g) is finite).
+    #[inline(always)]
+    pub(super) fn at_g(&self) -> &PathPoint {
+        &self.at_g
+    }
+
     /// The slip mode of a collision that ends at the normal impulse `i_n`: forward
     /// sliding up to and including G, then the mode after G.
     #[inline(always)]
@@ -429,7 +448,7 @@ impl RouthPath {
 /// The root `x ≥ 0` of `v0 x + ½ s x² = r` for `r ≥ 0` on a rising branch, in the form
 /// without cancellation; `None` if there is none.
 #[inline(always)]
-fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
+pub(super) fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
     if r <= 0.0 {
         return Some(0.0);
     }
