@@ -3,7 +3,8 @@
 //! without it (every pair sampled at every step, `Simulation::set_broad_phase(false)`).
 //! The two runs take the same steps; the difference is the cost of the event functions.
 //!
-//! `cargo bench --bench broad_phase`; criterion reports the time per run for each n.
+//! `cargo bench -p ricochet-benches --bench broad_phase`; criterion reports the time per run
+//! for each n.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -18,7 +19,7 @@ fn free_fall(c: &mut Criterion) {
     let mut group = c.benchmark_group("chain_free_fall_10ms");
     group.sample_size(10);
     for n in LINKS {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chain.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chain.toml");
         let mut s = scene::load_chain(&path, n).expect("scenes/chain.toml");
         s.settings.t_end = 0.01;
         for (name, on) in [("broad_phase", true), ("every_pair", false)] {

@@ -1,7 +1,7 @@
 //! Issue 15's target: the 32-link chain falling on the floor (`scenes/chain_floor.toml`:
 //! impacts of up to 45 coupled points, then ~35 points lying on the floor in stick and
 //! slip), 5 s event-driven with no observer, under 10 s of wall time. Ten samples.
-//! `cargo bench --bench chain_floor`
+//! `cargo bench -p ricochet-benches --bench chain_floor`
 
 use std::hint::black_box;
 use std::path::Path;
@@ -11,7 +11,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use ricochet::sim::{MaterialOverride, NullObserver, Simulation, StopReason};
 
 fn chain_floor(c: &mut Criterion) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chain_floor.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chain_floor.toml");
     let s = ricochet::scene::load(&path).expect("scenes/chain_floor.toml");
     let run = || {
         let mut sim = Simulation::new(&s.model, &s.settings, MaterialOverride::default()).unwrap();

@@ -7,6 +7,8 @@
 //! criterion by value (`b.iter(|| impact::solve(…))`, until stop 30), it was copied once
 //! more, by a `memcpy` whose wide loads wait for the law's narrower stores to reach the
 //! cache: the harness's cost, not the law's (issue 16; ARCHITECTURE.md, Speed).
+//!
+//! `cargo bench -p ricochet-benches --bench impact`
 
 use std::hint::black_box;
 

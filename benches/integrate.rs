@@ -1,7 +1,7 @@
 //! Integrator and event-location costs: steps per second of DOPRI5 and RK4 on a small
 //! nonlinear system, and the cost of locating (and settling) one event.
 //!
-//! `cargo bench --bench integrate`
+//! `cargo bench -p ricochet-benches --bench integrate`
 
 use std::hint::black_box;
 

@@ -12,7 +12,7 @@
 //!   state and closed point of the run at t = 1 s (target ≤ 400 ns).
 //!
 //! The work counters of the run (steps, right-hand sides) are printed once.
-//! `cargo bench --bench kane`
+//! `cargo bench -p ricochet-benches --bench kane`
 
 use std::hint::black_box;
 use std::io::Cursor;
@@ -25,7 +25,7 @@ use ricochet::scene::Scene;
 use ricochet::sim::{MaterialOverride, MotionSystem, NullObserver, RunSummary, Simulation};
 
 fn scene(t_end: f64) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/kane_double_pendulum.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/kane_double_pendulum.toml");
     let mut s = ricochet::scene::load(&path).expect("scenes/kane_double_pendulum.toml");
     s.settings.t_end = t_end;
     s.settings.integrator.rtol = 1e-10;

@@ -8,6 +8,8 @@
 //! `resting_problem` of `tests/all/lcp_lemke.rs`): `A` rank deficient (`d = 3n/2`), every
 //! other contact a duplicate of its neighbour's normal row, `b_n = 0` but for one point in
 //! five, `b_t` random, `μ` in [0, 1], slips unknown.
+//!
+//! `cargo bench -p ricochet-benches --bench lcp`
 
 use std::hint::black_box;
 

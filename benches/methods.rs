@@ -22,7 +22,7 @@
 //! then criterion measures each variant (the report gives the simulated seconds per wall
 //! second of each).
 //!
-//! `cargo bench --bench methods`
+//! `cargo bench -p ricochet-benches --bench methods`
 
 use std::hint::black_box;
 use std::path::Path;
@@ -38,7 +38,7 @@ use ricochet::sim::{
 const H: f64 = 1e-3;
 
 fn scene(name: &str, t_end: f64) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.toml"));
     let mut s = ricochet::scene::load(&path).expect("scene");
     s.settings.t_end = t_end;
     s.settings.integrator.dt = H;

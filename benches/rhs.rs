@@ -8,7 +8,8 @@
 //! Expected growth: O(n²) for the mass matrix (a chain has depth n), O(n³/6) for the
 //! factorization, O(n) for the rest and for the articulated-body factor.
 //!
-//! `cargo bench --bench rhs`; criterion reports the time per evaluation for each n.
+//! `cargo bench -p ricochet-benches --bench rhs`; criterion reports the time per evaluation
+//! for each n.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -27,7 +28,7 @@ use ricochet::state::Data;
 const LINKS: [usize; 6] = [1, 2, 4, 8, 16, 32];
 
 fn chain_state(n: usize) -> (ricochet::model::Model, Vec<f64>, Vec<f64>) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chain.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chain.toml");
     let s = scene::load_chain(&path, n).expect("scenes/chain.toml");
     // A generic state: bent links moving.
     let q: Vec<f64> = (0..n).map(|i| 0.3 + 0.1 * i as f64).collect();

@@ -29,7 +29,7 @@
 //! once, before the measurements, with the median wall time of 15 rounds of 5 plain runs,
 //! the three variants interleaved in each round (the machine may be shared).
 //!
-//! `cargo bench --bench simulate`
+//! `cargo bench -p ricochet-benches --bench simulate`
 
 use std::hint::black_box;
 use std::io::Cursor;
@@ -50,7 +50,7 @@ const RATE: f64 = 100.0;
 
 /// The double pendulum for 10 s at 100 Hz.
 fn scene() -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/kane_double_pendulum.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/kane_double_pendulum.toml");
     let mut s = ricochet::scene::load(&path).expect("scenes/kane_double_pendulum.toml");
     s.settings.t_end = T_END;
     s.settings.output_rate = RATE;

@@ -429,7 +429,8 @@ fn solve_upper_2x2(l: &[Real; 3], y: &mut [Real]) {
 /// The fewest speeds for which a holonomic model whose speeds are on average at depth
 /// 4 or more (a chain of 9 links or more, a tree with long branches) is factored by the
 /// articulated-body algorithm, `O(n)`, rather than by the Cholesky factorization of `M`,
-/// `O(n³)` for a chain. Measured with `cargo bench --bench rhs -- rhs_factor`
+/// `O(n³)` for a chain. Measured with
+/// `cargo bench -p ricochet-benches --bench rhs -- rhs_factor`
 /// (`forward_dynamics` of an `n`-link chain with each factor, median ns): 4 links 289
 /// dense / 321 articulated, 8 links 701 / 634, 16 links 1,884 / 1,289, 32 links
 /// 5,913 / 2,557, 256 links 818,688 / 21,384.

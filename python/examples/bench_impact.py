@@ -2,7 +2,7 @@
 ``benches/impact.rs`` (each law on a reverse-sliding, a sticking and a forward-sliding
 problem), to compare with its time per call of ``impact::solve``:
 
-    cargo bench --bench impact
+    cargo bench -p ricochet-benches --bench impact
     python python/examples/bench_impact.py [ROWS]
 """
 
