@@ -7,7 +7,7 @@
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 
 use ricochet::dynamics::DynamicsError;
 use ricochet::impact::ImpactError;
@@ -85,6 +85,16 @@ fn sh(script: &str, scene_name: &str, dir: &Path) -> Output {
         .stdin(Stdio::null())
         .output()
         .unwrap()
+}
+
+/// `command` started with its standard output and error piped, its input `stdin`.
+fn piped(command: &mut Command, stdin: Stdio) -> Child {
+    (command
+        .stdin(stdin)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped()))
+    .spawn()
+    .unwrap()
 }
 
 fn temp_dir(test: &str) -> PathBuf {
@@ -182,14 +192,10 @@ fn a_closed_standard_output_is_not_an_error() {
             scene("bouncing_ball").display().to_string(),
         ],
     ] {
-        let mut child = Command::new(BIN)
-            .args(&args)
-            .current_dir(&dir)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+        let mut child = piped(
+            Command::new(BIN).args(&args).current_dir(&dir),
+            Stdio::null(),
+        );
         drop(child.stdout.take());
         let mut stderr = String::new();
         child
@@ -217,15 +223,13 @@ fn a_closed_standard_output_is_not_an_error() {
 fn a_closed_standard_error_is_not_an_error() {
     let dir = temp_dir("stderr");
     let run = |closed: bool, log: &str| {
-        let mut child = Command::new(BIN)
-            .args(["run", &scene("chain_floor").display().to_string()])
-            .args(["--t-end", "0.46", "-o", log])
-            .current_dir(&dir)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+        let mut child = piped(
+            Command::new(BIN)
+                .args(["run", &scene("chain_floor").display().to_string()])
+                .args(["--t-end", "0.46", "-o", log])
+                .current_dir(&dir),
+            Stdio::null(),
+        );
         let mut stderr = String::new();
         if closed {
             drop(child.stdout.take());
@@ -260,13 +264,7 @@ fn a_closed_standard_error_is_not_an_error() {
     assert!(ricochet::log::read(dir.join("closed.mcap")).is_ok());
 
     // `impact`: one bad line; its count goes to standard error, closed here: exit 1.
-    let mut child = Command::new(BIN)
-        .arg("impact")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = piped(Command::new(BIN).arg("impact"), Stdio::piped());
     drop(child.stdout.take());
     drop(child.stderr.take());
     {
