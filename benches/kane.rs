@@ -41,12 +41,10 @@ fn run(s: &Scene) -> RunSummary {
 fn run_logged(s: &Scene) -> usize {
     let mut sim = Simulation::new(&s.model, &s.settings, MaterialOverride::default()).unwrap();
     let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
-    let mut log = RunLogger::new(
+    let mut log = RunLogger::for_scene(
         writer,
-        &s.model,
-        (&s.name, &s.text),
-        (&s.settings, &MaterialOverride::default()),
-        &s.initial,
+        s,
+        &MaterialOverride::default(),
         sim.scales().gap_tol,
     )
     .unwrap();

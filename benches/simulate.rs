@@ -75,15 +75,7 @@ fn simulate(s: &Scene, observer: &mut dyn Observer) -> RunSummary {
 fn simulate_logged(s: &Scene) -> (RunSummary, usize) {
     let mut sim = Simulation::new(&s.model, &s.settings, elastic()).expect("simulation");
     let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).expect("log");
-    let mut log = RunLogger::new(
-        writer,
-        &s.model,
-        (&s.name, &s.text),
-        (&s.settings, &elastic()),
-        &s.initial,
-        sim.scales().gap_tol,
-    )
-    .expect("log");
+    let mut log = RunLogger::for_scene(writer, s, &elastic(), sim.scales().gap_tol).expect("log");
     let summary = sim.run(&s.initial, &mut log, None);
     let bytes = log.finish(&summary).expect("finish").into_inner();
     (summary, bytes.len())

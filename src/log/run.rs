@@ -15,6 +15,7 @@ use super::{
 };
 use crate::math::{Pose, Real, Vec2};
 use crate::model::{Model, PairId};
+use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::sim::{
     ImpactEvent, Level, MaterialOverride, Observer, ObserverError, PairMode, RunSummary, Sample,
@@ -84,6 +85,25 @@ pub struct RunLogger<W: Write + Seek + Send + 'static> {
 }
 
 impl<W: Write + Seek + Send + 'static> RunLogger<W> {
+    /// [`RunLogger::new`] for a run of `scene` as it stands (its model, name, file text,
+    /// settings and initial state) with the material `overrides`; `gap_tol` is the run's
+    /// ([`Simulation::scales`](crate::sim::Simulation::scales)).
+    pub fn for_scene(
+        writer: LogWriter<W>,
+        scene: &Scene,
+        overrides: &MaterialOverride,
+        gap_tol: Real,
+    ) -> Result<Self, LogError> {
+        Self::new(
+            writer,
+            &scene.model,
+            (&scene.name, &scene.text),
+            (&scene.settings, overrides),
+            &scene.initial,
+            gap_tol,
+        )
+    }
+
     /// Starts the log of a run of `model` from the state `initial`: writes the scene
     /// (`name`, file `text`), the `settings` with the material `overrides` (so that the
     /// log describes the run it holds), and the bodies and obstacles on `/geometry`.
@@ -567,15 +587,8 @@ mod tests {
         let mut writer =
             LogWriter::new(Cursor::new(Vec::new()), Default::default()).expect("a log in memory");
         writer.defer_samples(defer);
-        let mut log = RunLogger::new(
-            writer,
-            &s.model,
-            (&s.name, &s.text),
-            (&s.settings, &over),
-            &s.initial,
-            sim.scales().gap_tol,
-        )
-        .expect("a logger");
+        let mut log =
+            RunLogger::for_scene(writer, &s, &over, sim.scales().gap_tol).expect("a logger");
         let summary = sim.run(&s.initial, &mut log, None);
         log.finish(&summary).expect("finished").into_inner()
     }
@@ -611,15 +624,7 @@ mod tests {
             let mut writer = LogWriter::new(Cursor::new(Vec::new()), Default::default())
                 .expect("a log in memory");
             writer.defer_samples(defer);
-            let mut log = RunLogger::new(
-                writer,
-                &s.model,
-                (&s.name, &s.text),
-                (&s.settings, &over),
-                &s.initial,
-                gap_tol,
-            )
-            .expect("a logger");
+            let mut log = RunLogger::for_scene(writer, &s, &over, gap_tol).expect("a logger");
             let (q, u) = (s.initial.q.as_slice(), s.initial.u.as_slice());
             let outcomes: Vec<String> = (0..6)
                 .map(|k| {

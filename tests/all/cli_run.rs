@@ -317,12 +317,10 @@ fn run_writes_where_told_and_the_same_bytes_as_the_library() {
     let s = ricochet::scene::load(scene).unwrap();
     let mut sim = Simulation::new(&s.model, &s.settings, MaterialOverride::default()).unwrap();
     let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
-    let mut log = RunLogger::new(
+    let mut log = RunLogger::for_scene(
         writer,
-        &s.model,
-        (&s.name, &s.text),
-        (&s.settings, &MaterialOverride::default()),
-        &s.initial,
+        &s,
+        &MaterialOverride::default(),
         sim.scales().gap_tol,
     )
     .unwrap();

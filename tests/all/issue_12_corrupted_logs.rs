@@ -75,15 +75,7 @@ fn uncompressed_run() -> Vec<u8> {
     let writer = LogWriter::new(Cursor::new(Vec::new()), options).unwrap();
     let overrides = MaterialOverride::default();
     let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
-    let mut log = RunLogger::new(
-        writer,
-        &scene.model,
-        (&scene.name, &scene.text),
-        (&scene.settings, &overrides),
-        &scene.initial,
-        sim.scales().gap_tol,
-    )
-    .unwrap();
+    let mut log = RunLogger::for_scene(writer, &scene, &overrides, sim.scales().gap_tol).unwrap();
     let summary = sim.run(&scene.initial, &mut log, None);
     log.finish(&summary).unwrap().into_inner()
 }

@@ -1305,15 +1305,8 @@ fn a_logged_sample_allocates_nothing_after_warm_up() {
     let over = MaterialOverride::default();
     let mut sim = Simulation::new(&s.model, &s.settings, over).expect("a simulation");
     let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).expect("a log");
-    let inner = ricochet::log::RunLogger::new(
-        writer,
-        &s.model,
-        (&s.name, &s.text),
-        (&s.settings, &over),
-        &s.initial,
-        sim.scales().gap_tol,
-    )
-    .expect("a logger");
+    let inner = ricochet::log::RunLogger::for_scene(writer, &s, &over, sim.scales().gap_tol)
+        .expect("a logger");
     let mut log = CountingLogger {
         inner,
         warm_up: 100,

@@ -87,15 +87,8 @@ fn a_run_and_its_log_give_the_same_summary_for_every_scene() {
         let overrides = ricochet::sim::MaterialOverride::default();
         let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
         let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
-        let mut log = RunLogger::new(
-            writer,
-            &scene.model,
-            (&scene.name, &scene.text),
-            (&scene.settings, &overrides),
-            &scene.initial,
-            sim.scales().gap_tol,
-        )
-        .unwrap();
+        let mut log =
+            RunLogger::for_scene(writer, &scene, &overrides, sim.scales().gap_tol).unwrap();
         let mut collector = Collector::new(&scene.model, &scene.settings, 10);
         let end = sim.run(
             &scene.initial,
@@ -141,15 +134,8 @@ fn a_run_keeping_every_sample_is_its_log() {
         let overrides = ricochet::sim::MaterialOverride::default();
         let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
         let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
-        let mut log = RunLogger::new(
-            writer,
-            &scene.model,
-            (&scene.name, &scene.text),
-            (&scene.settings, &overrides),
-            &scene.initial,
-            sim.scales().gap_tol,
-        )
-        .unwrap();
+        let mut log =
+            RunLogger::for_scene(writer, &scene, &overrides, sim.scales().gap_tol).unwrap();
         let mut collector = Collector::with_rule(&scene.model, Checkpoints::Every);
         let end = sim.run(
             &scene.initial,

@@ -40,15 +40,7 @@ fn ball_log(t_end: f64, options: LogOptions) -> Vec<u8> {
     let overrides = MaterialOverride::default();
     let mut sim = Simulation::new(&s.model, &s.settings, overrides).unwrap();
     let writer = LogWriter::new(Cursor::new(Vec::new()), options).unwrap();
-    let mut log = RunLogger::new(
-        writer,
-        &s.model,
-        (&s.name, &s.text),
-        (&s.settings, &overrides),
-        &s.initial,
-        sim.scales().gap_tol,
-    )
-    .unwrap();
+    let mut log = RunLogger::for_scene(writer, &s, &overrides, sim.scales().gap_tol).unwrap();
     let summary = sim.run(&s.initial, &mut log, None);
     log.finish(&summary).unwrap().into_inner()
 }

@@ -152,15 +152,7 @@ fn run_with<W: Write + Seek + Send + 'static>(
     interrupt: Option<&AtomicBool>,
 ) -> (Run, W) {
     let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
-    let log = RunLogger::new(
-        writer,
-        &scene.model,
-        (&scene.name, &scene.text),
-        (&scene.settings, &overrides),
-        &scene.initial,
-        sim.scales().gap_tol,
-    )
-    .unwrap();
+    let log = RunLogger::for_scene(writer, &scene, &overrides, sim.scales().gap_tol).unwrap();
     let mut tee = Tee {
         log,
         seen: Recorder {

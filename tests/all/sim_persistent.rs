@@ -477,15 +477,7 @@ fn mode_changes_reach_the_log_and_the_state_messages() {
     let overrides = MaterialOverride::default();
     let mut sim = Simulation::new(&scene.model, &scene.settings, overrides).unwrap();
     let writer = LogWriter::new(Cursor::new(Vec::new()), LogOptions::default()).unwrap();
-    let mut log = RunLogger::new(
-        writer,
-        &scene.model,
-        (&scene.name, &scene.text),
-        (&scene.settings, &overrides),
-        &scene.initial,
-        sim.scales().gap_tol,
-    )
-    .unwrap();
+    let mut log = RunLogger::for_scene(writer, &scene, &overrides, sim.scales().gap_tol).unwrap();
     let summary = sim.run(&scene.initial, &mut log, None);
     let bytes = log.finish(&summary).unwrap().into_inner();
     let read = ricochet::log::read_bytes(&bytes).unwrap();

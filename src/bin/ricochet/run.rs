@@ -248,15 +248,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             }
         })
         .with_context(cannot_write)?;
-    let log = RunLogger::new(
-        writer,
-        &scene.model,
-        (&scene.name, &scene.text),
-        (&scene.settings, &overrides),
-        &scene.initial,
-        gap_tol,
-    )
-    .with_context(cannot_write)?;
+    let log =
+        RunLogger::for_scene(writer, &scene, &overrides, gap_tol).with_context(cannot_write)?;
     let log = match live {
         Some(tap) => log.with_tap(tap),
         None => log,
