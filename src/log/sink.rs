@@ -368,14 +368,12 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
     ) -> Result<(), LogError> {
         self.failure.take()?;
         let batch = &mut self.open;
-        let layout = match &mut self.state_layout {
-            Some(last) if same_state_layout(last, state) => None,
-            last => {
-                batch.state_layouts.push(state.clone());
-                *last = Some(state.clone());
-                Some(batch.state_layouts.len() - 1)
-            }
-        };
+        let layout = new_layout(
+            &mut self.state_layout,
+            &mut batch.state_layouts,
+            state,
+            same_state_layout,
+        );
         let at = batch.words.len();
         state_words(&mut batch.words, state);
         batch.messages.push((header, Payload::State { at, layout }));
@@ -392,14 +390,12 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
     ) -> Result<(), LogError> {
         self.failure.take()?;
         let batch = &mut self.open;
-        let layout = match &mut self.tf_layout {
-            Some(last) if same_transforms_layout(last, tf) => None,
-            last => {
-                batch.tf_layouts.push(tf.clone());
-                *last = Some(tf.clone());
-                Some(batch.tf_layouts.len() - 1)
-            }
-        };
+        let layout = new_layout(
+            &mut self.tf_layout,
+            &mut batch.tf_layouts,
+            tf,
+            same_transforms_layout,
+        );
         let at = batch.words.len();
         transforms_words(&mut batch.words, tf);
         (batch.messages).push((header, Payload::Transforms { at, layout }));
@@ -424,14 +420,12 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
         if !planar_words(&mut batch.words, time, (layout.transforms.len(), frames)) {
             return Ok(false);
         }
-        let layout = match &mut self.tf_layout {
-            Some(last) if same_transforms_layout(last, layout) => None,
-            last => {
-                batch.tf_layouts.push(layout.clone());
-                *last = Some(layout.clone());
-                Some(batch.tf_layouts.len() - 1)
-            }
-        };
+        let layout = new_layout(
+            &mut self.tf_layout,
+            &mut batch.tf_layouts,
+            layout,
+            same_transforms_layout,
+        );
         (batch.messages).push((header, Payload::Planar { at, layout }));
         self.send_if_full()?;
         Ok(true)
@@ -526,6 +520,23 @@ impl<W: Write + Seek + Send + 'static> Drop for Sink<W> {
             let _ = done.recv();
         }
     }
+}
+
+/// The index in `layouts` (a batch's) of the layout of `now` if it is not the `last` one
+/// handed to the sink thread: then it is added there and becomes `last`. `None` when the
+/// sink thread has it already (`same`).
+fn new_layout<T: Clone>(
+    last: &mut Option<T>,
+    layouts: &mut Vec<T>,
+    now: &T,
+    same: fn(&T, &T) -> bool,
+) -> Option<usize> {
+    if last.as_ref().is_some_and(|last| same(last, now)) {
+        return None;
+    }
+    layouts.push(now.clone());
+    *last = Some(now.clone());
+    Some(layouts.len() - 1)
 }
 
 /// A log's work for a log thread: it calls its argument once it is done with the log
@@ -658,22 +669,17 @@ impl<W: Write + Seek> Writing<W> {
                     state.append_json(&mut self.encoded);
                     &self.encoded[..]
                 }
-                Payload::Transforms { at, layout } => {
+                Payload::Transforms { at, layout } | Payload::Planar { at, layout } => {
                     if let Some(k) = layout {
                         self.tf = batch.tf_layouts.get(k).cloned();
                     }
                     let tf = self.tf.as_mut().ok_or_else(no_layout)?;
-                    apply_transforms_words(tf, batch.words.get(at..).unwrap_or_default());
-                    self.encoded.clear();
-                    append_frame_transforms(&mut self.encoded, tf);
-                    &self.encoded[..]
-                }
-                Payload::Planar { at, layout } => {
-                    if let Some(k) = layout {
-                        self.tf = batch.tf_layouts.get(k).cloned();
+                    let words = batch.words.get(at..).unwrap_or_default();
+                    if let Payload::Planar { .. } = payload {
+                        apply_planar_words(tf, words);
+                    } else {
+                        apply_transforms_words(tf, words);
                     }
-                    let tf = self.tf.as_mut().ok_or_else(no_layout)?;
-                    apply_planar_words(tf, batch.words.get(at..).unwrap_or_default());
                     self.encoded.clear();
                     append_frame_transforms(&mut self.encoded, tf);
                     &self.encoded[..]
