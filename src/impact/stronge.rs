@@ -80,8 +80,8 @@ fn by_the_march(path: &RouthPath, e: Real) -> Result<Real, &'static str> {
 ///   `x_c = −v_n(G)/s`, with `W_c = W_G − ½ s x_c²` (`W_G ≤ 0` the work until G), and the
 ///   restitution work `½ s x²` reaches `−e² W_c` at `x = e √(x_c² − 2 W_G / s)`.
 ///
-/// DEPARTURE from the general march (kept as [`RouthPath::reach_normal_work`] from the
-/// point of compression, which the tests compare against): the same roots in closed form,
+/// DEPARTURE from the general march (kept as [`by_the_march`], which the tests compare
+/// against and [`solve`] falls back on): the same roots in closed form,
 /// with `v_n = 0` at `I_c` taken exactly instead of its rounding residue; fewer roundings,
 /// and one square root and one division fewer on the way. The last bits of `I_n` differ
 /// from the march's (see the tests, against a double-double evaluation of the march).
@@ -184,8 +184,7 @@ mod tests {
     }
 
     /// The closed forms of `end_of_collision` against the march in double-double, and the
-    /// march in doubles (the former code, still `RouthPath::reach_normal_work` from the
-    /// point of compression) against the same, on 200,000 problems at order one covering
+    /// march in doubles (the former code, [`by_the_march`]) against the same, on 200,000 problems at order one covering
     /// the three ways (compression and restitution before G; restitution across G;
     /// compression after G): on every problem the closed forms are at most 2 ulps farther
     /// from the reference than the march in doubles, and on average within 0.05 ulp of it.
@@ -214,10 +213,7 @@ mod tests {
                 continue;
             };
             let new = end_of_collision(&path, e, big_v).expect("the march ends");
-            let compression = path.at(path.reach_normal_velocity(0.0).expect("compression"));
-            let old = path
-                .reach_normal_work(&compression, -e * e * compression.work_n)
-                .expect("the march ends");
+            let old = by_the_march(&path, e).expect("the march ends");
             let way = if h > 0.0 && big_v / h <= path.i_g() {
                 usize::from(big_v / h * (1.0 + e) > path.i_g())
             } else {
