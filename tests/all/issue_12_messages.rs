@@ -5,7 +5,6 @@
 //! writer has stopped after an earlier error", not why nor which file; `ricochet run … |
 //! head -1` ended with "Broken pipe" and exit 1 although the run had completed.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 
@@ -197,15 +196,9 @@ fn a_closed_standard_output_is_not_an_error() {
             Stdio::null(),
         );
         drop(child.stdout.take());
-        let mut stderr = String::new();
-        child
-            .stderr
-            .take()
-            .unwrap()
-            .read_to_string(&mut stderr)
-            .unwrap();
-        let status = child.wait().unwrap();
-        assert_eq!(status.code(), Some(0), "{args:?}: {stderr}");
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
         assert!(
             !stderr.contains("Broken pipe") && !stderr.contains("panicked"),
             "{args:?}: {stderr}"
@@ -230,26 +223,16 @@ fn a_closed_standard_error_is_not_an_error() {
                 .current_dir(&dir),
             Stdio::null(),
         );
-        let mut stderr = String::new();
         if closed {
             drop(child.stdout.take());
             drop(child.stderr.take());
-        } else {
-            let mut stdout = String::new();
-            child
-                .stdout
-                .take()
-                .unwrap()
-                .read_to_string(&mut stdout)
-                .unwrap();
-            child
-                .stderr
-                .take()
-                .unwrap()
-                .read_to_string(&mut stderr)
-                .unwrap();
         }
-        (child.wait().unwrap().code(), stderr)
+        // Both pipes read at once (or none, closed).
+        let out = child.wait_with_output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
     };
     // Open: the run warns on standard error (else this test could not fail) and ends well.
     let (code, stderr) = run(false, "open.mcap");
