@@ -217,6 +217,18 @@ impl Evaluation {
     }
 }
 
+/// Where [`Persistent::vertex_products`] takes the bodies' spatial accelerations at
+/// `u̇ = 0`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Accel {
+    /// From `data.body_accel`: `data` holds the forward dynamics of the state
+    /// ([`crate::dynamics::forward_dynamics`], whose Newton–Euler pass at `u̇ = 0` wrote
+    /// them), as [`Persistent::accelerate`] requires.
+    InData,
+    /// [`velocity_product_accelerations`] of the kinematics in `data`.
+    Compute,
+}
+
 /// Scratch and results of the constrained dynamics of a set of closed points.
 pub struct Persistent {
     /// The closed points.
@@ -453,13 +465,14 @@ impl Persistent {
         model: &Model,
         data: &Data,
         (t, q, u): (Real, &[Real], &[Real]),
+        accel: Accel,
     ) -> Result<(), SimError> {
         let eps = 1e-3 * self.scales.length / self.scales.speed;
         let k = self.closed.len();
         // Each closed point's pair looked up once.
         self.resolve_pairs(model, data)?;
         if self.exact_products && self.vertices {
-            self.vertex_products(model, data);
+            self.vertex_products(model, data, accel);
             return Ok(());
         }
         // v at s = +ε, −ε, +2ε, −2ε, of each point.
@@ -524,15 +537,24 @@ impl Persistent {
     /// ([`crate::kinematics::velocity_product_accelerations`], [`point_acceleration`]).
     /// The same numbers as the differences of [`Self::velocity_products`] to their error
     /// (the test `vertex_products_agree_with_the_differences`), without their four
-    /// kinematics passes and contact queries. `data` holds the kinematics of the state.
-    fn vertex_products(&mut self, model: &Model, data: &Data) {
-        velocity_product_accelerations(model, data, &mut self.accel);
+    /// kinematics passes and contact queries. `data` holds the kinematics of the state;
+    /// with [`Accel::InData`], the forward dynamics of the state too, whose Newton–Euler
+    /// pass at `u̇ = 0` left those very accelerations in `data.body_accel` (the same
+    /// operations: the test `forward_dynamics_leaves_the_velocity_product_accelerations`).
+    fn vertex_products(&mut self, model: &Model, data: &Data, accel: Accel) {
+        let accel = match accel {
+            Accel::InData => &data.body_accel[..],
+            Accel::Compute => {
+                velocity_product_accelerations(model, data, &mut self.accel);
+                &self.accel[..]
+            }
+        };
         for (i, (c, n)) in self.closed.iter().zip(&self.planes).enumerate() {
             let Some(body) = model.colliders()[self.pairs[i].a.index()].body else {
                 continue; // not eligible (`vertex_on_fixed_plane`)
             };
             let p = data.body_pose[body.index()].transform_point(c.local);
-            let a = point_acceleration(data, body, p, self.accel[body.index()]);
+            let a = point_acceleration(data, body, p, accel[body.index()]);
             self.c[2 * i] = n.dot(a);
             self.c[2 * i + 1] = perp(*n).dot(a);
         }
@@ -545,6 +567,7 @@ impl Persistent {
         model: &Model,
         data: &mut Data,
         (t, q, u): (Real, &[Real], &[Real]),
+        accel: Accel,
     ) -> Result<(), SimError> {
         let k = self.closed.len();
         let ev = &mut self.ev;
@@ -584,7 +607,7 @@ impl Persistent {
                 }
             }
         }
-        self.velocity_products(model, data, (t, q, u))?;
+        self.velocity_products(model, data, (t, q, u), accel)?;
         if k == 1 {
             return self.assemble_one(data, t);
         }
@@ -660,7 +683,8 @@ impl Persistent {
 
     /// The constrained accelerations at `(t, q, u)`: solves for the forces of the closed
     /// points in their modes and adds `M⁻¹ Fᵀ λ` to `data.udot`, which holds the free
-    /// accelerations (after `forward_dynamics` of the same state).
+    /// accelerations (after `forward_dynamics` of the same state; its bodies' accelerations
+    /// at `u̇ = 0` in `data.body_accel` give the velocity products of closed vertices).
     pub fn accelerate(
         &mut self,
         model: &Model,
@@ -671,7 +695,8 @@ impl Persistent {
             return Ok(());
         }
         let t = state.0;
-        self.assemble(model, data, state)?;
+        // `data` holds the forward dynamics of `state` (the precondition).
+        self.assemble(model, data, state, Accel::InData)?;
         if !self.ev.complete {
             return Err(SimError::Contact {
                 t,
@@ -848,7 +873,7 @@ impl Persistent {
             })
             .collect();
         self.set(closed, candidates.iter().map(|c| c.mu).collect());
-        self.assemble(model, data, state)?;
+        self.assemble(model, data, state, Accel::Compute)?;
         let allowed: Vec<Allowed> = (self.ev.points.iter().zip(candidates))
             .map(|(p, c)| Allowed {
                 mu: c.mu,
@@ -1119,11 +1144,13 @@ mod tests {
                 let t = 0.01 * k as Real;
                 forward_kinematics(model, &mut data, t, &q, &u).unwrap();
                 p.set_exact_products(true);
-                p.velocity_products(model, &data, (t, &q, &u)).unwrap();
+                p.velocity_products(model, &data, (t, &q, &u), Accel::Compute)
+                    .unwrap();
                 assert_eq!(p.planes.len(), closed.len(), "{name}: not the exact path");
                 let exact = p.c.clone();
                 p.set_exact_products(false);
-                p.velocity_products(model, &data, (t, &q, &u)).unwrap();
+                p.velocity_products(model, &data, (t, &q, &u), Accel::Compute)
+                    .unwrap();
                 let scale = p.c.amax().max(1.0);
                 let err = (&exact - &p.c).amax() / scale;
                 worst = worst.max(err);
