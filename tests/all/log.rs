@@ -474,6 +474,79 @@ fn every_chunk_holds_messages() {
     assert!(caught.is_err(), "the format 1 fixture passed the check");
 }
 
+/// Every LZ4 chunk is the LZ4 frame of its records as mcap 0.26.0 as published made it:
+/// its records fed to liblz4's frame encoder (level 0, no block checksum, content
+/// checksum) field by field. vendor/mcap gathers them in 64 KiB first (PATCHES.md); the
+/// frame must not change. Re-encoded here from the decompressed records in pieces of 1 to
+/// 40 bytes and in one write, chunks of one LZ4 block and of several (1 MiB), both must
+/// give the chunk's bytes; the records' CRC and size are the chunk header's.
+#[test]
+fn lz4_chunks_are_one_frame_of_their_records() {
+    use lz4::liblz4::BlockChecksum;
+    use mcap::records::Record;
+    use std::io::Read;
+
+    fn encode(records: &[u8], piece: impl Fn(usize) -> usize) -> Vec<u8> {
+        let mut enc = lz4::EncoderBuilder::new()
+            .level(0)
+            .block_checksum(BlockChecksum::NoBlockChecksum)
+            .build(Vec::new())
+            .unwrap();
+        let mut at = 0;
+        let mut k = 0;
+        while at < records.len() {
+            let n = piece(k).min(records.len() - at);
+            enc.write_all(&records[at..at + n]).unwrap();
+            at += n;
+            k += 1;
+        }
+        let (out, result) = enc.finish();
+        result.unwrap();
+        out
+    }
+
+    let run = synthetic();
+    let mut several_blocks = 0;
+    for chunk_size in [64 * 1024, 1024 * 1024] {
+        let options = LogOptions {
+            chunk_size,
+            ..LogOptions::default()
+        };
+        let bytes = write_run(&run, options);
+        let mut chunks = 0;
+        for record in mcap::read::LinearReader::new(&bytes).unwrap() {
+            let Record::Chunk { header, data } = record.unwrap() else {
+                continue;
+            };
+            chunks += 1;
+            assert_eq!(header.compression, "lz4");
+            let mut records = Vec::new();
+            lz4::Decoder::new(&data[..])
+                .unwrap()
+                .read_to_end(&mut records)
+                .unwrap();
+            assert_eq!(records.len() as u64, header.uncompressed_size);
+            assert_eq!(crc32fast::hash(&records), header.uncompressed_crc);
+            if records.len() > 64 * 1024 {
+                several_blocks += 1;
+            }
+            // Pieces of 1, 8, 2, 4, 8, 8, 40, … bytes: an opcode, a length, a header, data.
+            let small = encode(&records, |k| [1, 8, 2, 4, 8, 8, 40, 3, 17][k % 9]);
+            assert!(
+                small == data[..],
+                "chunk {chunks}: not the frame of small writes"
+            );
+            let whole = encode(&records, |_| usize::MAX);
+            assert!(
+                whole == data[..],
+                "chunk {chunks}: not the frame of one write"
+            );
+        }
+        assert!(chunks >= 1);
+    }
+    assert!(several_blocks >= 1, "no chunk of more than one LZ4 block");
+}
+
 /// Exact (bit-for-bit) decoding needs `serde_json/float_roundtrip`, which the
 /// `jsonschema` dev-dependency turns on for test builds; protobuf doubles are their bits.
 #[test]
