@@ -191,8 +191,7 @@ fn solve_by(
 ) -> Result<Outcome, ImpactError> {
     // The usual case in one pass: valid data of moderate scales, the law's answer
     // clearly coherent and within the range of doubles at the caller's scales.
-    if let Some((f, unit)) = problem.at_moderate_scale() {
-        let (pb, mirrored) = paper_frame(&unit);
+    if let Some((f, pb, mirrored)) = problem.at_moderate_scale_in_paper_frame() {
         let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
         let case = c.sign_case();
         let sol = apply(&pb, &c, case);

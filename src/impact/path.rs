@@ -397,6 +397,28 @@ impl RouthPath {
         (x >= 0.0).then_some(self.i_g + x)
     }
 
+    /// [`reach_normal_velocity`](Self::reach_normal_velocity)`(0)`, the end of
+    /// compression, bit for bit, with `−v` for `0 − v` (a sign flip instead of a
+    /// subtraction on the laws' dependency chain, issue 16): `0 − v_n^A = −v_n^A` for
+    /// `v_n^A < 0`; after G, `0 − v_n(G)` and `−v_n(G)` differ only for `v_n(G) = +0`
+    /// (`+0` against `−0`), a quotient `±0` that passes `x ≥ 0` and adds nothing to
+    /// `Ĩ_n(G)`, which is never `−0` (`0`, `v_t^A/g` with both positive, or `+∞`).
+    #[inline(always)]
+    pub(super) fn end_of_compression(&self) -> Option<Real> {
+        debug_assert!(self.origin.v.n < 0.0, "the contact approaches");
+        if self.slide.dv_n > 0.0 {
+            let x = -self.origin.v.n / self.slide.dv_n;
+            if x <= self.i_g {
+                return Some(x);
+            }
+        }
+        if !self.i_g.is_finite() || self.after_slope.dv_n <= 0.0 {
+            return None;
+        }
+        let x = -self.at_g.v.n / self.after_slope.dv_n;
+        (x >= 0.0).then_some(self.i_g + x)
+    }
+
     /// The normal impulse at which the work of the normal impulse, counted from the point
     /// `from` (where `v_n ≥ 0`, rising), reaches `work ≥ 0`.
     ///
@@ -477,6 +499,46 @@ mod tests {
         }
         assert_eq!(rising_root(0.0, 0.0, 0.0), Some(0.0));
         assert_eq!(rising_root(0.0, 0.0, 1.0), None);
+    }
+
+    /// `end_of_compression` is `reach_normal_velocity(0)` bit for bit, on random paths of
+    /// every kind (singular W, zero slip, v_n(G) = ±0 by construction among them).
+    #[test]
+    fn end_of_compression_is_reach_normal_velocity_at_zero() {
+        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+        let mut u = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as Real / (1u64 << 53) as Real
+        };
+        let mut at_g_zero = 0;
+        for k in 0..200_000 {
+            let (a, b, d) = (u() * 2.0 - 1.0, u() * 2.0 - 1.0, u());
+            let d = if k % 7 == 0 { 0.0 } else { d };
+            let w = ImpactMatrix::new(a * a + 1e-3, a * b, b * b + d * d);
+            let mu = [0.0, 0.3, u() * 2.0][k % 3];
+            let vt = if k % 11 == 0 { 0.0 } else { u() };
+            // Every fifth problem: v_n^A = −h Ĩ_n(G), so that v_n(G) rounds to ±0 or near.
+            let c = Coefficients::new(&w, mu, ContactVelocity::new(-1.0, vt));
+            let vn = if k % 5 == 0 && c.g > 0.0 && c.h > 0.0 && vt > 0.0 {
+                -(c.h * (vt / c.g))
+            } else {
+                -(u() + 1e-3)
+            };
+            if vn >= 0.0 {
+                continue;
+            }
+            let path = RouthPath::new(&w, mu, ContactVelocity::new(vn, vt));
+            at_g_zero += usize::from(path.at_g().v.n == 0.0);
+            let (a, b) = (path.end_of_compression(), path.reach_normal_velocity(0.0));
+            assert_eq!(
+                a.map(Real::to_bits),
+                b.map(Real::to_bits),
+                "{w:?} {mu} {vn} {vt}"
+            );
+        }
+        assert!(at_g_zero > 100, "{at_g_zero}");
     }
 
     #[test]

@@ -16,7 +16,7 @@ use super::{Failure, LawSolution};
 #[inline(always)]
 pub fn solve(pb: &ImpactProblem, c: &Coefficients) -> LawSolution {
     let path = RouthPath::with_coefficients(&pb.w, pb.mu, pb.v_a, c);
-    let Some(i_c) = path.reach_normal_velocity(0.0) else {
+    let Some(i_c) = path.end_of_compression() else {
         return LawSolution::failed(if c.det == 0.0 {
             Failure::Jam
         } else {

@@ -288,8 +288,10 @@ impl ImpactProblem {
     /// double, and the powers of two come as [`Factors`]; and g, h, p, q, below `2^502` at
     /// order one (the entries of `W` are below 2), stay below `2^842` at the caller's
     /// scale. `None` for the others, invalid data included
-    /// ([`at_order_one`](Self::at_order_one) tells which error).
-    #[inline(always)]
+    /// ([`at_order_one`](Self::at_order_one) tells which error). Kept for the tests, as
+    /// the oracle of [`at_moderate_scale_in_paper_frame`](Self::at_moderate_scale_in_paper_frame),
+    /// which [`solve`](super::solve) takes.
+    #[cfg(test)]
     pub(super) fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
         // The exponents of the largest magnitudes, from their bits (0 and subnormals,
         // infinities and NaN fall outside ±340).
@@ -307,6 +309,39 @@ impl ImpactProblem {
             & (self.mu >= 0.0)
             & (self.mu < MODERATE_FRICTION);
         valid.then(|| (scale.factors(), unit))
+    }
+
+    /// [`at_moderate_scale`](Self::at_moderate_scale) followed by the paper's frame
+    /// (`t` oriented so that `v_t^A ≥ 0`, [P, Eq. (10)]), and whether `t` was mirrored:
+    /// the same numbers as `paper_frame` of the problem at order one, bit for bit, but the
+    /// sign of the mirror is folded into the powers of two (`m_nt · (−2^-a)`,
+    /// `v_t^A · (−2^-b)`: a product by `−2^k` is exact and is minus the product by `2^k`),
+    /// decided on the caller's `v_t^A` instead of the scaled one. The mirror then waits
+    /// for neither the scaled `v_t^A` nor a product by `±1`: it was on the dependency
+    /// chain of every coefficient (issue 16). The two decisions differ only where
+    /// `v_t^A · 2^-b` underflows to −0 (then the scaled number is not mirrored): those
+    /// problems are declined (`None`), and the general path solves them as before.
+    #[inline(always)]
+    pub(super) fn at_moderate_scale_in_paper_frame(
+        &self,
+    ) -> Option<(Factors, ImpactProblem, bool)> {
+        let (w, v) = (&self.w, self.v_a);
+        let w_max = magnitude(w.nn).max(magnitude(w.nt)).max(magnitude(w.tt));
+        let v_max = magnitude(v.n).max(magnitude(v.t));
+        let scale = Scale::of_moderate_magnitudes(w_max, v_max)?;
+        // v_t^A < 0: its sign bit set and its magnitude not 0 (NaN is not moderate).
+        let mirrored = v.t.to_bits() > (1 << 63);
+        let unit = scale.down_moderate_mirrored(self, mirrored);
+        let u = &unit.w;
+        let valid = (u.nn > 0.0)
+            & (u.tt >= 0.0)
+            & (u.det() >= -SINGULAR_RELATIVE_DET * u.nn * u.tt)
+            & (self.v_a.n < 0.0)
+            & (0.0..=1.0).contains(&self.e)
+            & (self.mu >= 0.0)
+            & (self.mu < MODERATE_FRICTION)
+            & ((unit.v_a.t != 0.0) | (v.t == 0.0));
+        valid.then(|| (scale.factors(), unit, mirrored))
     }
 
     /// The error of a `W` that is not positive semidefinite (the slow path of `validate`).

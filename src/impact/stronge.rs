@@ -106,7 +106,8 @@ fn end_of_collision(path: &RouthPath, e: Real, big_v: Real) -> Result<Real, &'st
         return Err("compression never ends");
     }
     let at_g = path.at_g();
-    let x_c = (0.0 - at_g.v.n) / s;
+    // −v_n(G) for 0 − v_n(G): the same I_n (see `RouthPath::end_of_compression`).
+    let x_c = -at_g.v.n / s;
     if x_c >= 0.0 {
         let x = e * (x_c * x_c - 2.0 * at_g.work_n / s).sqrt();
         Ok((i_g + x_c) + x)
