@@ -492,7 +492,9 @@ impl<'m> Simulation<'m> {
     /// candidates of the event location (see [`broad`]).
     fn broad_after_step(&mut self) -> Result<(), SimError> {
         if self.every_pair_forced() {
-            self.arm();
+            // `broad_before_step` armed the same candidates for this step: the closed
+            // points (only the contact stage sets them) and the disarmed pairs are those it
+            // saw (every pair forced then too), and nothing since changed the candidates.
             return Ok(());
         }
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
