@@ -551,8 +551,19 @@ fn sample<St: Stepper, G: EventFunctions>(
         }
         check_finite(&sp.s.g, armed, t)?;
         smp.gs[j * m..(j + 1) * m].copy_from_slice(&sp.s.g);
-        if stand_ins && all_positive(smp, armed, [0, 1, parts]) {
-            return Ok(true);
+        if stand_ins {
+            if all_positive(smp, armed, [0, 1, parts]) {
+                return Ok(true);
+            }
+            // Every interval is classified: the other interior samples are the first's.
+            for k in 2..parts {
+                smp.gs.copy_within(m..2 * m, k * m);
+                smp.ts[k] = time(k);
+                smp.known[k] = smp.known[1];
+                if smp.known[k] {
+                    smp.gds[k * m..(k + 1) * m].fill(0.0);
+                }
+            }
         }
         let at_contact = j == 0 && sp.s.g.iter().zip(armed).any(|(g, &a)| a && *g <= 0.0);
         smp.known[j] = settings.extremum_search || at_contact;
@@ -566,14 +577,14 @@ fn sample<St: Stepper, G: EventFunctions>(
             smp.gds[j * m..(j + 1) * m].copy_from_slice(&sp.s.gd);
         }
         if j == 0 && parts > 1 && sp.interior_stand_ins(time(1), parts - 1)? {
+            // The first interior sample; the others, the same, are written only if the
+            // step needs its intervals classified (above, at the step's end).
             check_finite(&sp.s.g, armed, time(1))?;
-            for k in 1..parts {
-                smp.ts[k] = time(k);
-                smp.gs[k * m..(k + 1) * m].copy_from_slice(&sp.s.g);
-                smp.known[k] = settings.extremum_search;
-                if smp.known[k] {
-                    smp.gds[k * m..(k + 1) * m].fill(0.0);
-                }
+            smp.ts[1] = time(1);
+            smp.gs[m..2 * m].copy_from_slice(&sp.s.g);
+            smp.known[1] = settings.extremum_search;
+            if smp.known[1] {
+                smp.gds[m..2 * m].fill(0.0);
             }
             stand_ins = true;
         }

@@ -563,7 +563,7 @@ impl GapFunctions<'_> {
     }
 
     /// `model.pair_of(pair)` ([`Self::pair`] when the model has the pair, the same pair).
-    fn pair_of(&self, pair: PairId) -> ContactPair {
+    pub(super) fn pair_of(&self, pair: PairId) -> ContactPair {
         self.pair(pair).unwrap_or_else(|| self.model.pair_of(pair))
     }
 

@@ -645,7 +645,8 @@ impl<'m> Simulation<'m> {
                 continue;
             }
             let id = self.gaps.candidates[r];
-            let pair = self.model.pair_of(id);
+            // `model.pair_of`, through the event functions' last lookup (the same pair).
+            let pair = self.gaps.pair_of(id);
             let reach = |c| broad::reach(self.model, start, c);
             let ((va, ra, wa), (vb, rb, wb)) = (reach(pair.a), reach(pair.b));
             let v = va + vb;

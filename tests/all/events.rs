@@ -599,6 +599,89 @@ fn a_function_that_crosses_inside_a_step_is_sampled_despite_stand_ins() {
     }
 }
 
+/// [`Floor`] with a fixed positive stand-in at every interior sample and zero rates
+/// there, given one sample at a time or, if `at_once`, for all of them
+/// ([`EventFunctions::interior_stand_ins`]). Not a bound (the function does cross): the
+/// locator's two paths must agree on what they are given.
+struct StandInFloor {
+    floor: Floor,
+    stand_in: f64,
+    at_once: bool,
+}
+
+impl EventFunctions for StandInFloor {
+    type Error = Infallible;
+    fn values(&mut self, t: f64, y: &[f64], g: &mut [f64]) -> Result<(), Infallible> {
+        self.floor.values(t, y, g)
+    }
+    fn rates(&mut self, t: f64, y: &[f64], dy: &[f64], gd: &mut [f64]) -> Result<bool, Infallible> {
+        self.floor.rates(t, y, dy, gd)
+    }
+    fn interior_values_without_state(
+        &mut self,
+        _t: f64,
+        g: &mut [f64],
+    ) -> Result<bool, Infallible> {
+        g[0] = self.stand_in;
+        Ok(true)
+    }
+    fn interior_rates_without_state(
+        &mut self,
+        _t: f64,
+        gd: &mut [f64],
+    ) -> Result<bool, Infallible> {
+        gd[0] = 0.0;
+        Ok(true)
+    }
+    fn interior_stand_ins(&mut self, _samples: usize, g: &mut [f64]) -> Result<bool, Infallible> {
+        if self.at_once {
+            g[0] = self.stand_in;
+        }
+        Ok(self.at_once)
+    }
+}
+
+/// The stand-ins of a step's interior taken at once, and the step's end not positive
+/// (here the function crosses zero in the step's last interval): the locator classifies
+/// the intervals with the stand-ins as its samples, as it does with them given one sample
+/// at a time — the same event, bit for bit, a `Crossing` bracketed in the last interval.
+#[test]
+fn stand_ins_at_once_classify_a_step_as_one_at_a_time() {
+    let (amp, d, h) = (1.0, 0.3, 1.0 / 16.0);
+    let mut found = Vec::new();
+    for at_once in [false, true] {
+        let mut funcs = StandInFloor {
+            floor: Floor {
+                level: -amp + d,
+                rates: true,
+            },
+            stand_in: 1.0,
+            at_once,
+        };
+        let mut sys = oscillator();
+        let mut locator = EventLocator::new(2, 1, LocatorSettings::default());
+        let mut d5 = dopri_fixed(h);
+        d5.start(&mut sys, 0.0, &[amp, 0.0]).unwrap();
+        found.push(first_event(
+            &mut d5,
+            &mut sys,
+            &mut funcs,
+            &mut locator,
+            &[true],
+            4.0,
+        ));
+    }
+    println!("{found:?}");
+    let (ev, step) = found[0].expect("the crossing at the step's end must be found");
+    assert_eq!(found[0], found[1]);
+    assert_eq!(ev.kind, EventKind::Crossing);
+    // Between the last interior sample and the step's end.
+    assert!(
+        ev.t_lo >= step.0 + 0.8 * (step.1 - step.0) && ev.t_hi <= step.1,
+        "{ev:?}"
+    );
+}
+
 /// Near-tangent: depths 1e-3 … 1e-10 under adaptive DOPRI5 (rtol 1e-12, h_max 1): each is
 /// found, at the closed-form time to within the conditioning 1/|ġ(t*)| = 1/√(2d) times
 /// the tolerance; and a trajectory that stays 1e-8 above the floor raises no event.
