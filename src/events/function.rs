@@ -56,6 +56,25 @@ pub trait EventFunctions {
         Ok(false)
     }
 
+    /// Whether every function has a stand-in at each of the `samples` interior samples of
+    /// the step being located, asked once after the values and rates at the step's start:
+    /// if so, writes them into `g` and returns `true` — they must be what
+    /// [`interior_values_without_state`] writes at each of those samples, the same numbers
+    /// at all of them (a stand-in is one number for the step), with the zero rates of
+    /// [`interior_rates_without_state`] — and counts them as sampled. The locator then
+    /// takes no interior sample: with every armed function positive at both ends of the
+    /// step and at the stand-ins, whose rates are zero, no interval of the step has an
+    /// event to classify (no sign change; no minimum to search, which needs a rate `< 0`
+    /// followed by one `> 0`), and the step has none without the rates at its end.
+    /// `false`, with nothing written, when some function needs a sample (the default).
+    ///
+    /// [`interior_values_without_state`]: EventFunctions::interior_values_without_state
+    /// [`interior_rates_without_state`]: EventFunctions::interior_rates_without_state
+    fn interior_stand_ins(&mut self, samples: usize, g: &mut [Real]) -> Result<bool, Self::Error> {
+        let _ = (samples, g);
+        Ok(false)
+    }
+
     /// Writes `ġᵢ(t, y)` at an interior sample of a step's regular sampling, after
     /// [`interior_values`](EventFunctions::interior_values) at the same `t`, like
     /// [`rates`](EventFunctions::rates). A function that got a positive stand-in there

@@ -186,6 +186,24 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
             .map_err(|source| EventError::Function { t, source })
     }
 
+    /// The stand-ins of every interior sample into `scratch.g`, if the functions have them
+    /// for all `samples` of them (see [`EventFunctions::interior_stand_ins`]); `t` is the
+    /// first one's time, for an error.
+    fn interior_stand_ins(
+        &mut self,
+        t: Real,
+        samples: usize,
+    ) -> Result<bool, EventError<G::Error>> {
+        let given = (self.funcs)
+            .interior_stand_ins(samples, &mut self.s.g)
+            .map_err(|source| EventError::Function { t, source })?;
+        if given {
+            self.counters.value_evals += samples as u64;
+            self.counters.rate_evals += samples as u64;
+        }
+        Ok(given)
+    }
+
     /// `gᵢ(t)` of the one function `i` (see [`EventFunctions::value`]).
     fn value(&mut self, t: Real, i: usize) -> Result<Real, EventError<G::Error>> {
         self.state_at(t);
@@ -447,7 +465,10 @@ impl EventLocator {
             s: &mut self.scratch,
             counters: &mut self.counters,
         };
-        sample(&mut sp, &mut self.samples, &self.settings, armed)?;
+        if sample(&mut sp, &mut self.samples, &self.settings, armed)? {
+            // Positive everywhere the step was sampled, with stand-ins inside: no event.
+            return Ok(None);
+        }
 
         let (m, parts) = (self.m, self.settings.samples + 1);
         let sim = self.settings.simultaneity;
@@ -491,21 +512,37 @@ impl EventLocator {
 /// Stage 1: `g` at the `k + 2` sample times (the interior ones through
 /// [`EventFunctions::interior_values`] and [`EventFunctions::interior_rates`]), and `ġ` where it is needed (everywhere with the
 /// extremum search; else at the start, if an armed function is not positive there).
+///
+/// When the functions give stand-ins for every interior sample
+/// ([`EventFunctions::interior_stand_ins`], asked after the start's sample), those are
+/// written for all of them, with zero rates; if then every armed function is positive
+/// at the start, at the stand-ins and at the end, no interval can have an event (a sign
+/// change needs a value `≤ 0`; a minimum to search, a rate `< 0` at an interval's start
+/// and `> 0` at its end, and every interval has a zero rate at one end; a maximum, values
+/// `≤ 0`): the rates at the end are not sampled, and `true` says the step has no event.
 fn sample<St: Stepper, G: EventFunctions>(
     sp: &mut Sampler<'_, St, G>,
     smp: &mut Samples,
     settings: &LocatorSettings,
     armed: &[bool],
-) -> Result<(), EventError<G::Error>> {
+) -> Result<bool, EventError<G::Error>> {
     let (t0, t1) = (sp.stepper.t_prev(), sp.stepper.t());
     let parts = settings.samples + 1;
     let m = armed.len();
-    for j in 0..=parts {
-        let t = if j == parts {
+    let time = |j: usize| {
+        if j == parts {
             t1
         } else {
             t0 + (t1 - t0) * (j as Real / parts as Real)
-        };
+        }
+    };
+    let mut stand_ins = false;
+    for j in 0..=parts {
+        if stand_ins && j < parts {
+            // Written with the start's sample.
+            continue;
+        }
+        let t = time(j);
         smp.ts[j] = t;
         if j == 0 || j == parts {
             sp.values(t)?;
@@ -514,6 +551,20 @@ fn sample<St: Stepper, G: EventFunctions>(
         }
         check_finite(&sp.s.g, armed, t)?;
         smp.gs[j * m..(j + 1) * m].copy_from_slice(&sp.s.g);
+        if stand_ins {
+            if all_positive(smp, armed, [0, 1, parts]) {
+                return Ok(true);
+            }
+            // Every interval is classified: the other interior samples are the first's.
+            for k in 2..parts {
+                smp.gs.copy_within(m..2 * m, k * m);
+                smp.ts[k] = time(k);
+                smp.known[k] = smp.known[1];
+                if smp.known[k] {
+                    smp.gds[k * m..(k + 1) * m].fill(0.0);
+                }
+            }
+        }
         let at_contact = j == 0 && sp.s.g.iter().zip(armed).any(|(g, &a)| a && *g <= 0.0);
         smp.known[j] = settings.extremum_search || at_contact;
         if smp.known[j] {
@@ -525,8 +576,29 @@ fn sample<St: Stepper, G: EventFunctions>(
             check_finite(&sp.s.gd, armed, t)?;
             smp.gds[j * m..(j + 1) * m].copy_from_slice(&sp.s.gd);
         }
+        if j == 0 && parts > 1 && sp.interior_stand_ins(time(1), parts - 1)? {
+            // The first interior sample; the others, the same, are written only if the
+            // step needs its intervals classified (above, at the step's end).
+            check_finite(&sp.s.g, armed, time(1))?;
+            smp.ts[1] = time(1);
+            smp.gs[m..2 * m].copy_from_slice(&sp.s.g);
+            smp.known[1] = settings.extremum_search;
+            if smp.known[1] {
+                smp.gds[m..2 * m].fill(0.0);
+            }
+            stand_ins = true;
+        }
     }
-    Ok(())
+    Ok(false)
+}
+
+/// Whether every armed function is positive at the samples `js`.
+fn all_positive<const K: usize>(smp: &Samples, armed: &[bool], js: [usize; K]) -> bool {
+    let m = armed.len();
+    js.iter().all(|&j| {
+        let g = &smp.gs[j * m..(j + 1) * m];
+        g.iter().zip(armed).all(|(&g, &a)| !a || g > 0.0)
+    })
 }
 
 fn check_finite<E: std::error::Error + 'static>(

@@ -563,7 +563,7 @@ impl GapFunctions<'_> {
     }
 
     /// `model.pair_of(pair)` ([`Self::pair`] when the model has the pair, the same pair).
-    fn pair_of(&self, pair: PairId) -> ContactPair {
+    pub(super) fn pair_of(&self, pair: PairId) -> ContactPair {
         self.pair(pair).unwrap_or_else(|| self.model.pair_of(pair))
     }
 
@@ -766,9 +766,10 @@ impl GapFunctions<'_> {
         decided
     }
 
-    /// The values at an interior sample where every function has a stand-in (see
-    /// [`StandIns`]): nothing computed.
-    fn values_of_nothing(&mut self, t: Real, g: &mut [Real]) {
+    /// The values at `samples` interior samples where every function has a stand-in (see
+    /// [`StandIns`]), the same at each: nothing computed. `t` is the sample's time, for
+    /// its rates (NaN: none asked).
+    fn values_of_nothing(&mut self, t: Real, samples: u64, g: &mut [Real]) {
         let s = &mut self.stand_ins;
         let closed = self.persistent.closed();
         if s.nothing.len() == g.len() {
@@ -793,11 +794,12 @@ impl GapFunctions<'_> {
         }
         if !closed.is_empty() {
             s.used = true;
-            s.counts.used += 1;
+            s.counts.samples += samples;
+            s.counts.used += samples;
         }
         s.gaps_used = true;
         s.nothing_at = t;
-        s.counts.skipped += 1;
+        s.counts.skipped += samples;
     }
 
     /// The values at an interior sample with the force functions' stand-ins: the gaps
@@ -1012,10 +1014,19 @@ impl EventFunctions for GapFunctions<'_> {
         if self.interior() != Interior::Nothing {
             return Ok(false);
         }
-        if !self.persistent.closed().is_empty() {
-            self.stand_ins.counts.samples += 1;
+        self.values_of_nothing(t, 1, g);
+        Ok(true)
+    }
+
+    /// [`Self::interior_values_without_state`] for all the interior samples of the step at
+    /// once (the same stand-ins at each, zero rates), when every function has one: the
+    /// exact values that follow (the step's end first) check their bounds, as they do
+    /// after the samples one by one.
+    fn interior_stand_ins(&mut self, samples: usize, g: &mut [Real]) -> Result<bool, Nested> {
+        if self.interior() != Interior::Nothing {
+            return Ok(false);
         }
-        self.values_of_nothing(t, g);
+        self.values_of_nothing(Real::NAN, samples as u64, g);
         Ok(true)
     }
 
@@ -1033,12 +1044,13 @@ impl EventFunctions for GapFunctions<'_> {
     }
 
     fn interior_values(&mut self, t: Real, y: &[Real], g: &mut [Real]) -> Result<(), Nested> {
-        if !self.persistent.closed().is_empty() {
+        let interior = self.interior();
+        if interior != Interior::Nothing && !self.persistent.closed().is_empty() {
             self.stand_ins.counts.samples += 1;
         }
-        match self.interior() {
+        match interior {
             Interior::Nothing => {
-                self.values_of_nothing(t, g);
+                self.values_of_nothing(t, 1, g);
                 Ok(())
             }
             Interior::Kinematic => self.values_with_stand_ins(t, y, g),

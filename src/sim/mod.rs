@@ -448,25 +448,15 @@ impl<'m> Simulation<'m> {
     /// Stage `broad` before the step: the candidates of the coming step for its cap,
     /// from the boxes grown by what the colliders travel within the horizon
     /// `H = min(h_max, 1.01 · 10 h_next)` from their speeds and gravity (see [`broad`]).
-    /// The kinematics of the step's start in `self.sampler`, which `cap_for_spin` reads too.
+    /// The kinematics of the step's start: the right-hand side's, or computed into
+    /// `self.sampler` (see [`Self::start_kinematics`]); `cap_for_spin` reads them too.
     fn broad_before_step(&mut self) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
-        {
+        if Self::start_kinematics(self.model, &self.system, &self.stepper, &self.gaps).is_none() {
             let y = self.stepper.y();
-            // The right-hand side's kinematics if its last evaluation was this state (the
-            // last stage of the step that ended here), else computed: the same numbers.
-            let shared = (self.system.kinematics_at(t, &y[..n], &y[n..nqu]))
-                .filter(|_| self.gaps.shares_kinematics());
-            match shared {
-                Some(data) => self.sampler.copy_kinematics_from(data),
-                None => {
-                    update_positions(self.model, &mut self.sampler, t, &y[..n])
-                        .map_err(|e| e.at(t))?;
-                    update_velocities(self.model, &mut self.sampler, &y[n..nqu])
-                        .map_err(|e| e.at(t))?;
-                }
-            }
+            update_positions(self.model, &mut self.sampler, t, &y[..n]).map_err(|e| e.at(t))?;
+            update_velocities(self.model, &mut self.sampler, &y[n..nqu]).map_err(|e| e.at(t))?;
         }
         if self.every_pair_forced() {
             self.arm();
@@ -476,8 +466,10 @@ impl<'m> Simulation<'m> {
             .h_max_base()
             .min(1.01 * broad::GROWTH * self.stepper.h_next());
         let (g, slack) = (self.model.gravity().length(), 10.0 * self.scales.gap_tol);
+        let start = Self::start_kinematics(self.model, &self.system, &self.stepper, &self.gaps)
+            .unwrap_or(&self.sampler);
         let regions = (&mut self.boxes, &mut self.planes);
-        broad::grown_boxes(self.model, &self.sampler, regions, |v| {
+        broad::grown_boxes(self.model, start, regions, |v| {
             v * h + 0.5 * g * h * h + slack
         })
         .map_err(|e| e.at(t))?;
@@ -486,13 +478,31 @@ impl<'m> Simulation<'m> {
         Ok(())
     }
 
+    /// The right-hand side's kinematics of the step's start, if its last evaluation was
+    /// that state (the last stage of the step that ended there; the same numbers as
+    /// computed, see `GapFunctions::take_end_kinematics`), read where they are instead of
+    /// copied; `None`: `broad_before_step` computes them into `self.sampler`.
+    fn start_kinematics<'a>(
+        model: &Model,
+        system: &'a MotionSystem<'_>,
+        stepper: &AnyStepper,
+        gaps: &GapFunctions<'_>,
+    ) -> Option<&'a Data> {
+        let (n, nqu) = (model.nq(), model.nq() + model.nu());
+        let y = stepper.y();
+        (system.kinematics_at(stepper.t(), &y[..n], &y[n..nqu]))
+            .filter(|_| gaps.shares_kinematics())
+    }
+
     /// Stage `broad` after the step: the boxes before the step grown to hold the
     /// colliders' boxes at the locator's sample times, each grown by what it travels in a
     /// sample interval at its speed bound there; their overlapping pairs are the
     /// candidates of the event location (see [`broad`]).
     fn broad_after_step(&mut self) -> Result<(), SimError> {
         if self.every_pair_forced() {
-            self.arm();
+            // `broad_before_step` armed the same candidates for this step: the closed
+            // points (only the contact stage sets them) and the disarmed pairs are those it
+            // saw (every pair forced then too), and nothing since changed the candidates.
             return Ok(());
         }
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
@@ -618,7 +628,7 @@ impl<'m> Simulation<'m> {
     /// cover `d` from the speed `V` under gravity), and
     /// near them samples no farther apart than an eighth of the smaller shape's radius of
     /// relative motion, and an eighth of a half-turn of rotation. The speeds are those of
-    /// the kinematics of the step's start that `broad_before_step` leaves in `self.sampler`.
+    /// the kinematics of the step's start that `broad_before_step` found or computed.
     fn cap_for_spin(&mut self) -> Result<(), SimError> {
         let t = self.stepper.t();
         let mut cap = self.h_max_base();
@@ -628,13 +638,16 @@ impl<'m> Simulation<'m> {
         let g = self.model.gravity().length();
         // One kinematics pass for the gaps of every pair below, at the first that needs it.
         let mut positions = false;
+        let start = Self::start_kinematics(self.model, &self.system, &self.stepper, &self.gaps)
+            .unwrap_or(&self.sampler);
         for r in 0..self.gaps.candidates.len() {
             if !self.armed[gaps::SLOTS * r] {
                 continue;
             }
             let id = self.gaps.candidates[r];
-            let pair = self.model.pair_of(id);
-            let reach = |c| broad::reach(self.model, &self.sampler, c);
+            // `model.pair_of`, through the event functions' last lookup (the same pair).
+            let pair = self.gaps.pair_of(id);
+            let reach = |c| broad::reach(self.model, start, c);
             let ((va, ra, wa), (vb, rb, wb)) = (reach(pair.a), reach(pair.b));
             let v = va + vb;
             if v.is_nan() || v <= 0.0 {
@@ -738,27 +751,50 @@ impl<'m> Simulation<'m> {
         if rate.is_nan() || rate <= 0.0 {
             return Ok(());
         }
+        let t_end = self.settings.t_end;
+        let due = |k: u64| {
+            let t = k as Real / rate;
+            !(t > t_until || t > t_end)
+        };
+        if !observer.wants_samples() {
+            // No samples: only the passages are due, up to the last output time, and one
+            // flush there reports them in the order of the flushes one output time at a
+            // time (each reports its own in time order, after the earlier times'). The
+            // last due index `k`, from its estimate, by the loop's own test.
+            let first = self.next_output;
+            if !due(first) {
+                return Ok(());
+            }
+            let mut k = ((t_until.min(t_end) * rate).floor() as u64).max(first);
+            while k < u64::MAX && due(k + 1) {
+                k += 1;
+            }
+            while !due(k) {
+                k -= 1;
+            }
+            self.flush_passages(k as Real / rate, observer)?;
+            self.next_output = k + 1;
+            return Ok(());
+        }
         let mut y = std::mem::take(&mut self.y);
         let mut result = Ok(());
         loop {
             let t = self.next_output as Real / rate;
-            if t > t_until || t > self.settings.t_end {
+            if !due(self.next_output) {
                 break;
             }
             result = self.flush_passages(t, observer);
             if result.is_err() {
                 break;
             }
-            if observer.wants_samples() {
-                if t == self.stepper.t() {
-                    y.copy_from_slice(self.stepper.y());
-                } else {
-                    self.stepper.dense(t, &mut y);
-                }
-                result = self.sample(t, &y, false, observer);
-                if result.is_err() {
-                    break;
-                }
+            if t == self.stepper.t() {
+                y.copy_from_slice(self.stepper.y());
+            } else {
+                self.stepper.dense(t, &mut y);
+            }
+            result = self.sample(t, &y, false, observer);
+            if result.is_err() {
+                break;
             }
             self.next_output += 1;
         }

@@ -484,6 +484,204 @@ fn grazing_dip_between_samples() {
     }
 }
 
+/// [`Floor`] whose caller offers stand-ins for the interior samples of a step
+/// ([`EventFunctions::interior_stand_ins`]) when its bound shows that the function cannot
+/// reach zero in it: on the oscillator `|ẋ| ≤ A`, so `g(t) ≥ g₀ − A (t − t₀)`, and a step of
+/// length `h` with `g₀ > 2 A h` stays above `g₀/2` (the stand-in). The step's start `g₀`
+/// is the last value sampled when the locator asks (after the start's sample).
+struct BoundedFloor {
+    floor: Floor,
+    amp: f64,
+    h: f64,
+    /// The last value computed.
+    g: f64,
+    /// The stand-in of the step being located, decided at its start.
+    stand_in: Option<f64>,
+    /// Steps whose interior samples were stand-ins, and those refused.
+    offered: usize,
+    refused: usize,
+}
+
+impl EventFunctions for BoundedFloor {
+    type Error = Infallible;
+    fn values(&mut self, t: f64, y: &[f64], g: &mut [f64]) -> Result<(), Infallible> {
+        self.floor.values(t, y, g)?;
+        self.g = g[0];
+        Ok(())
+    }
+    fn rates(&mut self, t: f64, y: &[f64], dy: &[f64], gd: &mut [f64]) -> Result<bool, Infallible> {
+        self.floor.rates(t, y, dy, gd)
+    }
+    fn interior_values_without_state(
+        &mut self,
+        _t: f64,
+        g: &mut [f64],
+    ) -> Result<bool, Infallible> {
+        Ok(self.stand_in.map(|s| g[0] = s).is_some())
+    }
+    fn interior_rates_without_state(
+        &mut self,
+        _t: f64,
+        gd: &mut [f64],
+    ) -> Result<bool, Infallible> {
+        // After a stateless sample alone: zero.
+        Ok(self.stand_in.map(|_| gd[0] = 0.0).is_some())
+    }
+    /// Asked once per step, after the start's sample: decides the step's stand-in.
+    fn interior_stand_ins(&mut self, _samples: usize, g: &mut [f64]) -> Result<bool, Infallible> {
+        let g0 = self.g;
+        self.stand_in = (g0 > 2.0 * self.amp * self.h).then_some(0.5 * g0);
+        match self.stand_in {
+            Some(s) => {
+                g[0] = s;
+                self.offered += 1;
+                Ok(true)
+            }
+            None => {
+                self.refused += 1;
+                Ok(false)
+            }
+        }
+    }
+}
+
+/// A function that stays positive at both ends of a step and at its samples but dips to
+/// zero inside it (the grazing dip above, depth 1e-6 A between samples), and one that
+/// crosses at a sample (depth 0.3 A): the caller's stand-ins are refused in the step of
+/// the event (its bound does not rule the crossing out), the locator samples it, and the
+/// event is the one found without stand-ins, bit for bit; in the steps before it, the
+/// stand-ins skip the interior samples (and the rates at the step's end).
+#[test]
+fn a_function_that_crosses_inside_a_step_is_sampled_despite_stand_ins() {
+    let amp = 1.0;
+    for (d, kind) in [(1e-6, EventKind::Grazing), (0.3, EventKind::Crossing)] {
+        let h = 1.0 / 16.0;
+        let floor = || Floor {
+            level: -amp + d,
+            rates: true,
+        };
+        let mut sys = oscillator();
+        let mut plain = EventLocator::new(2, 1, LocatorSettings::default());
+        let mut d5 = dopri_fixed(h);
+        d5.start(&mut sys, 0.0, &[amp, 0.0]).unwrap();
+        let oracle = first_event(&mut d5, &mut sys, &mut floor(), &mut plain, &[true], 4.0);
+
+        let mut bounded = BoundedFloor {
+            floor: floor(),
+            amp,
+            h,
+            g: f64::NAN,
+            stand_in: None,
+            offered: 0,
+            refused: 0,
+        };
+        let mut locator = EventLocator::new(2, 1, LocatorSettings::default());
+        let mut d5 = dopri_fixed(h);
+        d5.start(&mut sys, 0.0, &[amp, 0.0]).unwrap();
+        let found = first_event(&mut d5, &mut sys, &mut bounded, &mut locator, &[true], 4.0);
+        println!(
+            "d {d}: {found:?}, stand-ins in {} steps, refused in {}",
+            bounded.offered, bounded.refused
+        );
+        let (ev, step) = found.expect("the event must be found");
+        assert_eq!(ev.kind, kind);
+        assert_eq!(
+            Some((ev, step)),
+            oracle,
+            "d {d}: not the event without stand-ins"
+        );
+        assert!(step.0 < ev.t && ev.t <= step.1);
+        assert!(bounded.offered >= 10, "d {d}: {} steps", bounded.offered);
+        assert!(bounded.refused >= 1);
+        // The locator sampled the event's step: fewer rate samples than 6 per step.
+        let c = locator.counters();
+        assert!(c.rate_evals < 6 * c.calls, "{c:?}");
+    }
+}
+
+/// [`Floor`] with a fixed positive stand-in at every interior sample and zero rates
+/// there, given one sample at a time or, if `at_once`, for all of them
+/// ([`EventFunctions::interior_stand_ins`]). Not a bound (the function does cross): the
+/// locator's two paths must agree on what they are given.
+struct StandInFloor {
+    floor: Floor,
+    stand_in: f64,
+    at_once: bool,
+}
+
+impl EventFunctions for StandInFloor {
+    type Error = Infallible;
+    fn values(&mut self, t: f64, y: &[f64], g: &mut [f64]) -> Result<(), Infallible> {
+        self.floor.values(t, y, g)
+    }
+    fn rates(&mut self, t: f64, y: &[f64], dy: &[f64], gd: &mut [f64]) -> Result<bool, Infallible> {
+        self.floor.rates(t, y, dy, gd)
+    }
+    fn interior_values_without_state(
+        &mut self,
+        _t: f64,
+        g: &mut [f64],
+    ) -> Result<bool, Infallible> {
+        g[0] = self.stand_in;
+        Ok(true)
+    }
+    fn interior_rates_without_state(
+        &mut self,
+        _t: f64,
+        gd: &mut [f64],
+    ) -> Result<bool, Infallible> {
+        gd[0] = 0.0;
+        Ok(true)
+    }
+    fn interior_stand_ins(&mut self, _samples: usize, g: &mut [f64]) -> Result<bool, Infallible> {
+        if self.at_once {
+            g[0] = self.stand_in;
+        }
+        Ok(self.at_once)
+    }
+}
+
+/// The stand-ins of a step's interior taken at once, and the step's end not positive
+/// (here the function crosses zero in the step's last interval): the locator classifies
+/// the intervals with the stand-ins as its samples, as it does with them given one sample
+/// at a time — the same event, bit for bit, a `Crossing` bracketed in the last interval.
+#[test]
+fn stand_ins_at_once_classify_a_step_as_one_at_a_time() {
+    let (amp, d, h) = (1.0, 0.3, 1.0 / 16.0);
+    let mut found = Vec::new();
+    for at_once in [false, true] {
+        let mut funcs = StandInFloor {
+            floor: Floor {
+                level: -amp + d,
+                rates: true,
+            },
+            stand_in: 1.0,
+            at_once,
+        };
+        let mut sys = oscillator();
+        let mut locator = EventLocator::new(2, 1, LocatorSettings::default());
+        let mut d5 = dopri_fixed(h);
+        d5.start(&mut sys, 0.0, &[amp, 0.0]).unwrap();
+        found.push(first_event(
+            &mut d5,
+            &mut sys,
+            &mut funcs,
+            &mut locator,
+            &[true],
+            4.0,
+        ));
+    }
+    println!("{found:?}");
+    let (ev, step) = found[0].expect("the crossing at the step's end must be found");
+    assert_eq!(found[0], found[1]);
+    assert_eq!(ev.kind, EventKind::Crossing);
+    // Between the last interior sample and the step's end.
+    assert!(
+        ev.t_lo >= step.0 + 0.8 * (step.1 - step.0) && ev.t_hi <= step.1,
+        "{ev:?}"
+    );
+}
+
 /// Near-tangent: depths 1e-3 … 1e-10 under adaptive DOPRI5 (rtol 1e-12, h_max 1): each is
 /// found, at the closed-form time to within the conditioning 1/|ġ(t*)| = 1/√(2d) times
 /// the tolerance; and a trajectory that stays 1e-8 above the floor raises no event.

@@ -51,6 +51,7 @@ mod paper_table_2;
 mod regions;
 mod regress;
 mod repair;
+mod samples_or_not;
 mod scene;
 mod scene_check;
 mod sim_alloc;
