@@ -547,6 +547,46 @@ fn lz4_chunks_are_one_frame_of_their_records() {
     assert!(several_blocks >= 1, "no chunk of more than one LZ4 block");
 }
 
+/// `mcap::Writer::into_inner` on an open LZ4 chunk ends its frame with every message given
+/// so far in it, as mcap 0.26.0 as published did (its encoder's buffered block went into
+/// the frame): vendor/mcap's gathered bytes are not dropped. The frame is found by its
+/// magic number after the chunk's header and decoded with liblz4.
+#[test]
+fn an_lz4_chunk_given_up_still_holds_its_messages() {
+    use std::io::Read;
+    let mut w = mcap::WriteOptions::new()
+        .compression(Some(mcap::Compression::Lz4))
+        .chunk_size(None)
+        .create(Cursor::new(Vec::new()))
+        .unwrap();
+    let schema = w.add_schema("S", "jsonschema", b"{}").unwrap();
+    let channel = w
+        .add_channel(schema, "/a", "json", &BTreeMap::new())
+        .unwrap();
+    let payloads: Vec<String> = (0..50).map(|i| format!("{{\"i\":{i}}}")).collect();
+    for (i, p) in payloads.iter().enumerate() {
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: i as u32,
+            log_time: i as u64,
+            publish_time: i as u64,
+        };
+        w.write_to_known_channel(&header, p.as_bytes()).unwrap();
+    }
+    let bytes = w.into_inner().into_inner();
+    let magic = 0x184D_2204_u32.to_le_bytes();
+    let at = (bytes.windows(4).position(|x| x == magic)).expect("an LZ4 frame");
+    let mut records = Vec::new();
+    lz4::Decoder::new(&bytes[at..])
+        .unwrap()
+        .read_to_end(&mut records)
+        .unwrap();
+    let text = String::from_utf8_lossy(&records);
+    for p in &payloads {
+        assert!(text.contains(p.as_str()), "{p} is not in the frame");
+    }
+}
+
 /// Exact (bit-for-bit) decoding needs `serde_json/float_roundtrip`, which the
 /// `jsonschema` dev-dependency turns on for test builds; protobuf doubles are their bits.
 #[test]

@@ -1588,7 +1588,11 @@ impl<W: Write> Compressor<W> {
             #[cfg(feature = "zstd")]
             Compressor::Zstd(w) => w.into_inner().0,
             #[cfg(feature = "lz4")]
-            Compressor::Lz4(w, _) => w.finish().0,
+            Compressor::Lz4(mut w, pending) => {
+                // As without the gathering: the gathered bytes reach the frame first.
+                let _ = w.write_all(&pending);
+                w.finish().0
+            }
         }
     }
 }
