@@ -37,6 +37,18 @@ impl std::fmt::Display for Shown {
     }
 }
 
+/// Numbers uniform in `[0, 1)` (53 bits each) from the xorshift64 generator started at
+/// `state` (not 0): the random inputs of the library's tests.
+#[cfg(test)]
+pub(crate) fn uniform_numbers(mut state: u64) -> impl FnMut() -> Real {
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as Real / (1u64 << 53) as Real
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

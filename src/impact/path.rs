@@ -505,13 +505,7 @@ mod tests {
     /// every kind (singular W, zero slip, v_n(G) = ±0 by construction among them).
     #[test]
     fn end_of_compression_is_reach_normal_velocity_at_zero() {
-        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
-        let mut u = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as Real / (1u64 << 53) as Real
-        };
+        let mut u = crate::math::uniform_numbers(0x9e37_79b9_7f4a_7c15);
         let mut at_g_zero = 0;
         for k in 0..200_000 {
             let (a, b, d) = (u() * 2.0 - 1.0, u() * 2.0 - 1.0, u());

@@ -525,13 +525,7 @@ mod tests {
     /// (`W = L Lᵀ`, singular one time in seven), every law.
     #[test]
     fn one_pass_is_the_general_path() {
-        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as Real / (1u64 << 53) as Real
-        };
+        let mut rnd = crate::math::uniform_numbers(0x2545_F491_4F6C_DD1D);
         let one_pass = |law: Law, pb: &ImpactProblem| {
             let (f, unit) = pb.at_moderate_scale()?;
             assert_eq!(Ok(unit), pb.at_order_one().map(|(_, unit)| unit));

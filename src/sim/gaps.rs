@@ -1167,13 +1167,7 @@ mod tests {
     #[test]
     fn a_gap_that_can_close_in_the_step_gets_no_stand_in() {
         let grav = 9.81;
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = crate::math::uniform_numbers(0x9e37_79b9_7f4a_7c15);
         let (mut allowed, mut crossing) = (0, 0);
         for _ in 0..100_000 {
             let r = 0.01 + uniform();
@@ -1236,13 +1230,7 @@ mod tests {
             }
             sum
         };
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = crate::math::uniform_numbers(0x2545_f491_4f6c_dd1d);
         let (mut passed, mut worst) = (0, f64::INFINITY);
         for case in 0..20_000 {
             let lo = 1.0;
