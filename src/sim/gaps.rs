@@ -221,6 +221,18 @@ enum Interior {
     Nothing,
 }
 
+/// The speed bounds `V_a + V_b` of the candidates ([`GapFunctions::pair_speed`]) at the
+/// state whose kinematics `GapFunctions::data` held when they were computed: the check at
+/// a step's end, whose state is the next step's start, where `V₀` is the same numbers.
+#[derive(Default)]
+struct EndSpeeds {
+    t: Real,
+    /// `[q; u]` of that state.
+    qu: Vec<Real>,
+    /// Each candidate and its speed bound.
+    speeds: Vec<(PairId, Real)>,
+}
+
 #[derive(Default)]
 struct StandIns {
     /// `(lo, hi)` of each closed point's force functions over the step's stages.
@@ -251,6 +263,9 @@ struct StandIns {
     /// The time of the last check of the gaps' speed bounds (NaN: none): the values and
     /// the rates of a sample check them once.
     checked_at: Real,
+    /// The speed bounds of the candidates found by the last check at a step's end, with
+    /// the state `[q; u]` of `GapFunctions::data` then (see `GapFunctions::speeds_at`).
+    end_speeds: EndSpeeds,
     /// Whether an exact value broke the bound after they were used.
     failed: bool,
     /// Never use them (the oracle of the tests: `Simulation::set_stand_ins(false)`).
@@ -477,6 +492,9 @@ impl<'m> GapFunctions<'m> {
         s.v0.reserve(pairs.saturating_sub(s.v0.len()));
         s.gap.reserve(pairs.saturating_sub(s.gap.len()));
         (s.nothing).reserve((SLOTS * pairs).saturating_sub(s.nothing.len()));
+        let end = &mut s.end_speeds;
+        end.qu.reserve(nqu.saturating_sub(end.qu.len()));
+        (end.speeds).reserve(pairs.saturating_sub(end.speeds.len()));
     }
 
     /// The slot `s` of `pair` among the candidates' functions, if it is a candidate.
@@ -614,7 +632,9 @@ impl GapFunctions<'_> {
             self.here.points.clear();
             let contact = self.gap_contact(pair, t)?;
             contacts.push(contact);
-            self.here.candidate_points.push(self.here.points.clone());
+            // Moved, not copied: `other_point` writes them afresh at each use.
+            let points = std::mem::take(&mut self.here.points);
+            self.here.candidate_points.push(points);
             g[SLOTS * r] = contact.map_or(self.scales.length, |c| c.gap) - floor;
         }
         self.here.contacts = contacts;
@@ -881,19 +901,56 @@ impl GapFunctions<'_> {
                 && s.v0.len() == self.candidates.len()
                 && s.v0.iter().any(|v| v.is_nan())
             {
-                for r in 0..self.candidates.len() {
-                    let v = self.pair_speed(self.candidates[r]);
-                    self.stand_ins.v0[r] = v;
+                if self.end_speeds_hold(t) {
+                    // The check at the last step's end computed them at this very state.
+                    let speeds = &self.stand_ins.end_speeds.speeds;
+                    for (v0, &(_, v)) in self.stand_ins.v0.iter_mut().zip(speeds) {
+                        *v0 = v;
+                    }
+                } else {
+                    for r in 0..self.candidates.len() {
+                        let v = self.pair_speed(self.candidates[r]);
+                        self.stand_ins.v0[r] = v;
+                    }
                 }
             }
         } else if s.gaps_used && t > s.t0 && t <= s.t1 && t != s.checked_at {
             self.stand_ins.checked_at = t;
+            // Every candidate's bound, kept for the next step's start when `data` is
+            // described by `self.here` (its state known).
+            let mut end = std::mem::take(&mut self.stand_ins.end_speeds);
+            end.speeds.clear();
+            for &pair in &self.candidates {
+                end.speeds.push((pair, self.pair_speed(pair)));
+            }
             let s = &self.stand_ins;
-            let failed = (s.gap.iter().enumerate()).any(|(r, &(_, v_bar))| {
-                v_bar.is_finite() && !self.pair_speed(self.candidates[r]).le(&v_bar)
-            });
+            let failed = (s.gap.iter().zip(&end.speeds))
+                .any(|(&(_, v_bar), &(_, v))| v_bar.is_finite() && !v.le(&v_bar));
+            let here = &self.here;
+            let n = self.model.nq();
+            let known = here.valid && here.velocities && here.t == t && here.qu.len() > n;
+            end.t = if known { t } else { Real::NAN };
+            end.qu.clear();
+            if known {
+                end.qu.extend_from_slice(&here.qu);
+            }
+            self.stand_ins.end_speeds = end;
             self.stand_ins.failed |= failed;
         }
+    }
+
+    /// Whether the speed bounds of the last check at a step's end are those of the
+    /// kinematics in `self.data` at `t` (the same state, described by `self.here`, with
+    /// its velocities) for the current candidates.
+    fn end_speeds_hold(&self, t: Real) -> bool {
+        let (end, here) = (&self.stand_ins.end_speeds, &self.here);
+        end.t == t
+            && here.valid
+            && here.velocities
+            && here.t == t
+            && here.qu == end.qu
+            && end.speeds.len() == self.candidates.len()
+            && (end.speeds.iter().zip(&self.candidates)).all(|(&(pair, _), &c)| pair == c)
     }
 
     /// After an exact evaluation: whether a function that had a stand-in in this step
