@@ -1167,17 +1167,9 @@ impl TreePass<'_> {
             None => (Pose::IDENTITY, Twist::ZERO, Twist::ZERO, Twist::ZERO),
         };
         let (model, t) = (self.model, self.t);
+        // Each stage's results stored as soon as they are known, so that fewer of them are
+        // held (spilled) across the next stage.
         let place = place_joint(model, (i, joint, kind), body, t, self.q, &pose);
-        let at = (
-            place.frame.translation,
-            &place.subspace,
-            place.pose.translation,
-        );
-        let motion = move_joint(model, (i, joint, kind), t, self.u, (vp, vp_rem), at);
-        let at = (&place.frame, &place.subspace);
-        let body = (&place.inertia, &motion.twist, place.com);
-        let g = model.gravity();
-        let (a, f) = accelerate_body(kind, ap, at, motion.accel_vp, &place.qdd, body, g);
         self.joint_q[i] = place.q;
         self.joint_qdd_prescribed[i] = place.qdd;
         self.joint_frame[i] = place.frame;
@@ -1186,10 +1178,20 @@ impl TreePass<'_> {
         self.body_com[i] = place.com;
         self.body_inertia[i] = place.inertia;
         self.composite[i] = place.inertia;
+        let at = (
+            place.frame.translation,
+            &place.subspace,
+            place.pose.translation,
+        );
+        let motion = move_joint(model, (i, joint, kind), t, self.u, (vp, vp_rem), at);
         self.joint_qd[i] = motion.qd;
         self.body_twist[i] = motion.twist;
         self.body_twist_remainder[i] = motion.remainder;
         self.body_accel_vp[i] = motion.accel_vp;
+        let at = (&place.frame, &place.subspace);
+        let body = (&place.inertia, &motion.twist, place.com);
+        let g = model.gravity();
+        let (a, f) = accelerate_body(kind, ap, at, motion.accel_vp, &place.qdd, body, g);
         self.body_accel[i] = a;
         self.body_wrench[i] = f;
     }
