@@ -238,7 +238,21 @@ impl MassFactor {
     /// [`Self::solve_factor_transpose_in_place`] after this. With `Y = F⁻¹ Jᵀ`,
     /// `J M⁻¹ Jᵀ = Yᵀ Y` (one triangular solve per column of `Jᵀ`, not two, and a symmetric
     /// product) and `M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ)`.
+    ///
+    /// The factor of two speeds is solved inline ([`solve_lower_2x2`], the same operations
+    /// as the general dispatch), the others out of line: a persistent contact's right-hand
+    /// side makes two or three of these solves.
+    #[inline]
     pub fn solve_factor_in_place(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
+        if let (true, FactorStorage::Dense2(l), [_, _]) = (self.valid, &self.storage, &*b) {
+            solve_lower_2x2(l, b);
+            return Ok(());
+        }
+        self.solve_factor_in_place_general(b)
+    }
+
+    /// [`Self::solve_factor_in_place`] of any factor.
+    fn solve_factor_in_place_general(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
@@ -266,8 +280,21 @@ impl MassFactor {
     }
 
     /// `y ← F⁻ᵀ y`, the other half of [`Self::solve_in_place`] (see
-    /// [`Self::solve_factor_in_place`]).
+    /// [`Self::solve_factor_in_place`]). The factor of two speeds inline, as there.
+    #[inline]
     pub fn solve_factor_transpose_in_place(&mut self, y: &mut [Real]) -> Result<(), DynamicsError> {
+        if let (true, FactorStorage::Dense2(l), [_, _]) = (self.valid, &self.storage, &*y) {
+            solve_upper_2x2(l, y);
+            return Ok(());
+        }
+        self.solve_factor_transpose_in_place_general(y)
+    }
+
+    /// [`Self::solve_factor_transpose_in_place`] of any factor.
+    fn solve_factor_transpose_in_place_general(
+        &mut self,
+        y: &mut [Real],
+    ) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
