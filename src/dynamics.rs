@@ -238,7 +238,21 @@ impl MassFactor {
     /// [`Self::solve_factor_transpose_in_place`] after this. With `Y = F⁻¹ Jᵀ`,
     /// `J M⁻¹ Jᵀ = Yᵀ Y` (one triangular solve per column of `Jᵀ`, not two, and a symmetric
     /// product) and `M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ)`.
+    ///
+    /// The factor of two speeds is solved inline ([`solve_lower_2x2`], the same operations
+    /// as the general dispatch), the others out of line: a persistent contact's right-hand
+    /// side makes two or three of these solves.
+    #[inline]
     pub fn solve_factor_in_place(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
+        if let (true, FactorStorage::Dense2(l), [_, _]) = (self.valid, &self.storage, &*b) {
+            solve_lower_2x2(l, b);
+            return Ok(());
+        }
+        self.solve_factor_in_place_general(b)
+    }
+
+    /// [`Self::solve_factor_in_place`] of any factor.
+    fn solve_factor_in_place_general(&mut self, b: &mut [Real]) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
@@ -266,8 +280,21 @@ impl MassFactor {
     }
 
     /// `y ← F⁻ᵀ y`, the other half of [`Self::solve_in_place`] (see
-    /// [`Self::solve_factor_in_place`]).
+    /// [`Self::solve_factor_in_place`]). The factor of two speeds inline, as there.
+    #[inline]
     pub fn solve_factor_transpose_in_place(&mut self, y: &mut [Real]) -> Result<(), DynamicsError> {
+        if let (true, FactorStorage::Dense2(l), [_, _]) = (self.valid, &self.storage, &*y) {
+            solve_upper_2x2(l, y);
+            return Ok(());
+        }
+        self.solve_factor_transpose_in_place_general(y)
+    }
+
+    /// [`Self::solve_factor_transpose_in_place`] of any factor.
+    fn solve_factor_transpose_in_place_general(
+        &mut self,
+        y: &mut [Real],
+    ) -> Result<(), DynamicsError> {
         if !self.valid {
             return Err(DynamicsError::NotFactored);
         }
@@ -1167,17 +1194,9 @@ impl TreePass<'_> {
             None => (Pose::IDENTITY, Twist::ZERO, Twist::ZERO, Twist::ZERO),
         };
         let (model, t) = (self.model, self.t);
+        // Each stage's results stored as soon as they are known, so that fewer of them are
+        // held (spilled) across the next stage.
         let place = place_joint(model, (i, joint, kind), body, t, self.q, &pose);
-        let at = (
-            place.frame.translation,
-            &place.subspace,
-            place.pose.translation,
-        );
-        let motion = move_joint(model, (i, joint, kind), t, self.u, (vp, vp_rem), at);
-        let at = (&place.frame, &place.subspace);
-        let body = (&place.inertia, &motion.twist, place.com);
-        let g = model.gravity();
-        let (a, f) = accelerate_body(kind, ap, at, motion.accel_vp, &place.qdd, body, g);
         self.joint_q[i] = place.q;
         self.joint_qdd_prescribed[i] = place.qdd;
         self.joint_frame[i] = place.frame;
@@ -1186,10 +1205,20 @@ impl TreePass<'_> {
         self.body_com[i] = place.com;
         self.body_inertia[i] = place.inertia;
         self.composite[i] = place.inertia;
+        let at = (
+            place.frame.translation,
+            &place.subspace,
+            place.pose.translation,
+        );
+        let motion = move_joint(model, (i, joint, kind), t, self.u, (vp, vp_rem), at);
         self.joint_qd[i] = motion.qd;
         self.body_twist[i] = motion.twist;
         self.body_twist_remainder[i] = motion.remainder;
         self.body_accel_vp[i] = motion.accel_vp;
+        let at = (&place.frame, &place.subspace);
+        let body = (&place.inertia, &motion.twist, place.com);
+        let g = model.gravity();
+        let (a, f) = accelerate_body(kind, ap, at, motion.accel_vp, &place.qdd, body, g);
         self.body_accel[i] = a;
         self.body_wrench[i] = f;
     }
@@ -1246,9 +1275,10 @@ pub fn ode_rhs(
 
 /// The coordinate rates `q̇ = A(q, t) u + b(q, t)` [P, Eq. (1)] at the state of the last
 /// [`update_velocities`] (at the speeds `u`): `u` itself for a holonomic model.
+#[inline]
 pub fn coordinate_rates(model: &Model, data: &Data, u: &[Real], qdot: &mut [Real]) {
     if model.is_holonomic() {
-        qdot.copy_from_slice(u);
+        crate::linalg::copy_short(qdot, u);
     } else {
         crate::constraints::coordinate_rates(model, data, qdot);
     }
@@ -1387,6 +1417,18 @@ pub fn energy(
     })
 }
 
+/// `false` if [`power`] is zero whatever the state: no free joint of one coordinate has a
+/// damper or a constant effort, and no joint is prescribed. Each term of such a joint is
+/// then `0 · q̇ (· q̇)`, a zero (of either sign: `q̇` is finite, [`forward_dynamics`] checked
+/// it) that leaves the sums at `+0` bit for bit, so a caller may take [`Power::default`]
+/// instead (the right-hand side of the run, `sim::system::MotionSystem`).
+pub fn has_power(model: &Model) -> bool {
+    model.joints().iter().any(|joint| {
+        joint.drive.is_some()
+            || (joint.kind.ndof() == 1 && (joint.force.damping != 0.0 || joint.force.effort != 0.0))
+    })
+}
+
 /// The powers of the dampers, of the constant efforts and of the prescribed drives, for the
 /// energy audit: in free flight `dE/dt = damping + applied + drives (+ uᵀ τ)`.
 ///
@@ -1434,6 +1476,64 @@ fn check_finite(t: Real, what: &'static str, v: &[Real]) -> Result<(), DynamicsE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Where [`has_power`] says a model's dampers, efforts and drives have no power, [`power`]
+    /// is `+0` in each component, bit for bit, at random states of every bundled scene (so
+    /// the right-hand side may take [`Power::default`] instead); and at least one scene
+    /// has power and two have none.
+    #[test]
+    fn no_power_is_plus_zero_to_the_bit() {
+        let mut rng = crate::linalg::tests::Lcg(27);
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let (mut with, mut without, mut checked) = (0, 0, 0);
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let scene = crate::scene::load(&path).unwrap();
+            let model = &scene.model;
+            if has_power(model) {
+                with += 1;
+                continue;
+            }
+            without += 1;
+            let mut data = Data::new(model);
+            let (q0, u0) = (&scene.initial.q, &scene.initial.u);
+            for k in 0..200 {
+                let q: Vec<Real> = q0.iter().map(|x| x + 0.5 * rng.next()).collect();
+                // Speeds of both signs, exact zeros of both signs among them.
+                let u: Vec<Real> = (0..u0.len())
+                    .map(|i| match (k + i) % 7 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        _ => 5.0 * rng.next(),
+                    })
+                    .collect();
+                let t = 0.01 * k as Real;
+                if forward_dynamics(model, &mut data, t, &q, &u).is_err() {
+                    continue;
+                }
+                let p = power(model, &mut data);
+                let bits = [p.damping, p.applied, p.drives].map(Real::to_bits);
+                assert_eq!(
+                    bits,
+                    [(0.0 as Real).to_bits(); 3],
+                    "{}: {p:?}",
+                    path.display()
+                );
+                checked += 1;
+            }
+        }
+        assert!(
+            checked >= 150 * without,
+            "{checked} states of {without} scenes"
+        );
+        assert!(
+            with >= 1 && without >= 2,
+            "{with} scenes with power, {without} without"
+        );
+    }
 
     use crate::linalg::tests::Lcg;
 

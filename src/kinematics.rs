@@ -571,15 +571,19 @@ pub fn point_jacobian(
 ) -> Result<(), KinematicsError> {
     check_len("jacobian columns", model.nu(), jac.ncols())?;
     check_body(model, body)?;
-    jac.fill(0.0);
+    // On the column-major storage: `jac[(k, i)]` is `js[2 i + k]`.
+    let js = jac.as_mut_slice();
+    js.fill(0.0);
     for_each_tree_column(model, data, body, p, |index, col| {
         if model.is_holonomic() {
-            jac[(0, index)] = col.x;
-            jac[(1, index)] = col.y;
+            // Always there: `index < nu`, the columns checked above.
+            if let Some([x, y]) = js.get_mut(2 * index..2 * index + 2) {
+                [*x, *y] = [col.x, col.y];
+            }
         } else {
             crate::constraints::add_tree_column(model, data, index, |i, w| {
-                jac[(0, i)] += w * col.x;
-                jac[(1, i)] += w * col.y;
+                js[2 * i] += w * col.x;
+                js[2 * i + 1] += w * col.y;
             });
         }
     });

@@ -155,6 +155,23 @@ pub(crate) fn fit_vector(v: &mut DVector<Real>, len: usize) {
     }
 }
 
+/// `dst.copy_from_slice(src)` (the same lengths, or it panics as that does), entry by entry
+/// up to four entries: `copy_from_slice` of a length unknown at compile time calls
+/// `memcpy`, dearer than the few moves of a small model's coordinates, speeds, forces or
+/// per-body kinematics (several per right-hand side).
+#[inline(always)]
+pub(crate) fn copy_short<T: Copy>(dst: &mut [T], src: &[T]) {
+    match (dst, src) {
+        ([d0], [s0]) => *d0 = *s0,
+        ([d0, d1], [s0, s1]) => [*d0, *d1] = [*s0, *s1],
+        ([d0, d1, d2], [s0, s1, s2]) => [*d0, *d1, *d2] = [*s0, *s1, *s2],
+        ([d0, d1, d2, d3], [s0, s1, s2, s3]) => {
+            [*d0, *d1, *d2, *d3] = [*s0, *s1, *s2, *s3];
+        }
+        (dst, src) => dst.copy_from_slice(src),
+    }
+}
+
 /// `Σ aᵢ bᵢ` over the shorter of `a` and `b`, in four lanes (which the compiler
 /// vectorizes; a plain `zip().sum()` is one serial chain of additions).
 pub(crate) fn dot(a: &[Real], b: &[Real]) -> Real {
@@ -371,6 +388,30 @@ impl MinNorm {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// [`copy_short`] copies as `copy_from_slice` does, every entry's bits (NaN, `−0`
+    /// among them), at every length from 0 to 6 (the short cases and the fallback).
+    #[test]
+    fn copy_short_is_copy_from_slice() {
+        let mut rng = Lcg(5);
+        for len in 0..=6 {
+            for case in 0..50 {
+                let src: Vec<Real> = (0..len)
+                    .map(|i| match (case + i) % 5 {
+                        0 => -0.0,
+                        1 => Real::NAN,
+                        _ => rng.next() * 1e3,
+                    })
+                    .collect();
+                let (mut fast, mut slow) = (vec![7.0; len], vec![7.0; len]);
+                copy_short(&mut fast, &src);
+                slow.copy_from_slice(&src);
+                let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&slow), "length {len}");
+                assert_eq!(bits(&fast), bits(&src), "length {len}");
+            }
+        }
+    }
 
     /// `amax` of a slice is nalgebra's `amax` of the matrix with those entries, to the bit,
     /// with NaN, infinities, signed zeros and subnormals among random entries (a NaN's

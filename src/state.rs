@@ -237,7 +237,7 @@ impl Data {
     pub fn copy_kinematics_from(&mut self, other: &Data) {
         fn vec<T: Copy>(dst: &mut Vec<T>, src: &[T]) {
             if dst.len() == src.len() {
-                dst.copy_from_slice(src);
+                crate::linalg::copy_short(dst, src);
             } else {
                 dst.clear();
                 dst.extend_from_slice(src);

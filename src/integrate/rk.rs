@@ -329,22 +329,37 @@ impl Work {
     }
 }
 
-/// The stages `k₁ … k_m` as slices: `k₁` and the computed ones.
-fn stage_slices<'a>(k1: &'a [Real], done: &'a [Vec<Real>]) -> [&'a [Real]; 16] {
-    let mut src: [&[Real]; 16] = [&[]; 16];
-    src[0] = k1;
-    for (s, k) in src[1..].iter_mut().zip(done) {
-        *s = k;
+/// The stages `k₁ … k_m`: `k₁` and the computed ones, stage `j` (from 0) as a slice
+/// ([`Self::get`]). Two references, not an array of the slices: that one (256 bytes) was
+/// built and copied (`memcpy`) for every stage of every step.
+#[derive(Clone, Copy)]
+struct StageSlices<'a> {
+    k1: &'a [Real],
+    done: &'a [Vec<Real>],
+}
+
+impl<'a> StageSlices<'a> {
+    /// Stage `j`: `k₁` for `j = 0`, else the computed stage `j − 1` (empty if not computed).
+    #[inline(always)]
+    fn get(&self, j: usize) -> &'a [Real] {
+        match j.checked_sub(1) {
+            None => self.k1,
+            Some(i) => self.done.get(i).map_or(&[], |k| k.as_slice()),
+        }
     }
-    src
+}
+
+/// The stages `k₁ … k_m` as slices: `k₁` and the computed ones.
+fn stage_slices<'a>(k1: &'a [Real], done: &'a [Vec<Real>]) -> StageSlices<'a> {
+    StageSlices { k1, done }
 }
 
 /// `out = base + h Σⱼ aⱼ kⱼ` for a row of `A`, summed from left to right; a row with a
 /// single coefficient as `base + (h a) k` (see [`Tableau`]).
-fn stage_argument(out: &mut [Real], base: &[Real], h: Real, row: &Row, k: &[&[Real]; 16]) {
+fn stage_argument(out: &mut [Real], base: &[Real], h: Real, row: &Row, k: StageSlices<'_>) {
     if let [(j, a)] = row[..] {
         let ha = h * a;
-        for ((o, y0), k) in out.iter_mut().zip(base).zip(k[j]) {
+        for ((o, y0), k) in out.iter_mut().zip(base).zip(k.get(j)) {
             *o = y0 + ha * k;
         }
         return;
@@ -361,16 +376,16 @@ fn stage_argument(out: &mut [Real], base: &[Real], h: Real, row: &Row, k: &[&[Re
 /// element by element the operations and their order are those of `Σⱼ` written per
 /// element, so the result is the same to the bit.
 #[inline]
-fn weighted_sum(out: &mut [Real], row: &Row, k: &[&[Real]; 16]) {
+fn weighted_sum(out: &mut [Real], row: &Row, k: StageSlices<'_>) {
     let Some(&(j0, a0)) = row.first() else {
         out.fill(0.0);
         return;
     };
-    for (o, k) in out.iter_mut().zip(k[j0]) {
+    for (o, k) in out.iter_mut().zip(k.get(j0)) {
         *o = a0 * k;
     }
     for &(j, a) in &row[1..] {
-        for (o, k) in out.iter_mut().zip(k[j]) {
+        for (o, k) in out.iter_mut().zip(k.get(j)) {
             *o += a * k;
         }
     }
@@ -382,7 +397,7 @@ fn combination(
     base: Option<&[Real]>,
     factor: Real,
     row: &Row,
-    k: &[&[Real]; 16],
+    k: StageSlices<'_>,
 ) {
     weighted_sum(out, row, k);
     match base {
@@ -433,14 +448,14 @@ fn stages<S: OdeSystem>(
     for j in 1..s {
         let (done, rest) = w.k.split_at_mut(j - 1);
         let k = stage_slices(k1, done);
-        stage_argument(&mut w.y_stage, y0, h, &plan.a[j - 1], &k);
+        stage_argument(&mut w.y_stage, y0, h, &plan.a[j - 1], k);
         let c = tab.c[j];
         let t = if c == 1.0 { t1 } else { t0 + c * h };
         eval(sys, t, &w.y_stage, &mut rest[0], counters)?;
     }
     let (done, rest) = w.k.split_at_mut(s - 1);
     let k = stage_slices(k1, done);
-    combination(&mut w.y_new, Some(y0), h / tab.b_den, &plan.b, &k);
+    combination(&mut w.y_new, Some(y0), h / tab.b_den, &plan.b, k);
     eval(sys, t1, &w.y_new, &mut rest[0], counters)
 }
 
@@ -465,7 +480,7 @@ fn dense_output<S: OdeSystem>(
         DenseOutput::Hermite => {}
         DenseOutput::Shampine { .. } => {
             let k = stage_slices(k1, &w.k);
-            combination(&mut dense.r5, None, h, &plan.d[0], &k);
+            combination(&mut dense.r5, None, h, &plan.d[0], k);
         }
         DenseOutput::Extended { c, .. } => {
             for (m, &c) in c.iter().enumerate() {
@@ -474,13 +489,13 @@ fn dense_output<S: OdeSystem>(
                 let j = s + 1 + m;
                 let (done, rest) = w.k.split_at_mut(j - 1);
                 let k = stage_slices(k1, done);
-                stage_argument(&mut w.y_stage, y0, h, &plan.a[s - 1 + m], &k);
+                stage_argument(&mut w.y_stage, y0, h, &plan.a[s - 1 + m], k);
                 eval(sys, t0 + c * h, &w.y_stage, &mut rest[0], counters)?;
             }
             let k = stage_slices(k1, &w.k);
             let [r6, r7, r8] = &mut dense.r678;
             for (r, d) in [&mut dense.r5, r6, r7, r8].into_iter().zip(&plan.d) {
-                combination(r, None, h, d, &k);
+                combination(r, None, h, d, k);
             }
         }
     }
@@ -754,12 +769,12 @@ impl RungeKutta {
         match self.tableau.error {
             ErrorEstimate::None => 0.0,
             ErrorEstimate::Embedded { .. } => {
-                combination(&mut w.err, None, h, &self.plan.e, &k);
+                combination(&mut w.err, None, h, &self.plan.e, k);
                 error_norm(&w.err[..m], &self.y[..m], &w.y_new[..m], rtol, atol)
             }
             ErrorEstimate::Dop853 { .. } => {
-                combination(&mut w.err, None, 1.0, &self.plan.e, &k);
-                combination(&mut w.err3, None, 1.0, &self.plan.e3, &k);
+                combination(&mut w.err, None, 1.0, &self.plan.e, k);
+                combination(&mut w.err3, None, 1.0, &self.plan.e3, k);
                 dop853_error_norm(
                     &w.err[..m],
                     &w.err3[..m],

@@ -38,7 +38,7 @@ use crate::kinematics::{
     point_acceleration, update_positions, update_velocities, velocity_product_accelerations,
 };
 use crate::lcp::{self, Allowed, Mode};
-use crate::linalg::{dot, fit_matrix, fit_vector};
+use crate::linalg::{copy_short, dot, fit_matrix, fit_vector};
 use crate::math::{Pose, Real, Vec2, perp};
 use crate::model::spatial::Twist;
 use crate::model::{ContactPair, Model, PairId};
@@ -587,8 +587,8 @@ impl Persistent {
                     // solve; `J` itself is not stored (see below).
                     let nu = self.column.len();
                     let ys = self.y.as_mut_slice();
-                    ys[..nu].copy_from_slice(&self.eval.j_n);
-                    ys[nu..2 * nu].copy_from_slice(&self.eval.j_t);
+                    copy_short(&mut ys[..nu], &self.eval.j_n);
+                    copy_short(&mut ys[nu..2 * nu], &self.eval.j_t);
                     self.ev.points.push(p);
                 }
                 Some(p) => {
@@ -729,7 +729,7 @@ impl Persistent {
                 t,
                 message: "the forces of the closed contact points have no solution".to_owned(),
             })?;
-        self.ev.lambda.as_mut_slice().copy_from_slice(x.as_slice());
+        copy_short(self.ev.lambda.as_mut_slice(), x.as_slice());
         // u̇ += M⁻¹ Jᵀ λ = F⁻ᵀ (Y λ); Y λ summed column by column in the order of
         // nalgebra's `gemv` (the same numbers), without its generic machinery.
         let (nu, lambda) = (self.column.len(), self.ev.lambda.as_slice());
@@ -767,9 +767,16 @@ impl Persistent {
             }
         }
         let (_, q, u) = state;
-        self.ev.qu.clear();
-        self.ev.qu.extend_from_slice(q);
-        self.ev.qu.extend_from_slice(u);
+        let qu = &mut self.ev.qu;
+        if qu.len() == q.len() + u.len() {
+            let (to_q, to_u) = qu.split_at_mut(q.len());
+            copy_short(to_q, q);
+            copy_short(to_u, u);
+        } else {
+            qu.clear();
+            qu.extend_from_slice(q);
+            qu.extend_from_slice(u);
+        }
         self.ev.at = Some(t);
         Ok(())
     }

@@ -2,8 +2,9 @@
 
 use super::persistent::Persistent;
 use super::{AtTime, Nested, Scales};
-use crate::dynamics::{coordinate_rates, forward_dynamics, power};
+use crate::dynamics::{Power, coordinate_rates, forward_dynamics, has_power, power};
 use crate::integrate::OdeSystem;
+use crate::linalg::copy_short;
 use crate::math::Real;
 use crate::model::Model;
 use crate::state::Data;
@@ -26,6 +27,9 @@ pub struct MotionSystem<'m> {
     pub persistent: Persistent,
     /// The state `(t, [q; u])` whose kinematics `data` holds (see [`Self::kinematics_at`]).
     kinematics: KinematicsAt,
+    /// Whether the dampers, efforts and drives can have power ([`has_power`]); if not, the
+    /// right-hand side takes their zero powers without calling [`power`].
+    has_power: bool,
 }
 
 /// The state of the last right-hand side whose kinematics completed.
@@ -51,6 +55,7 @@ impl<'m> MotionSystem<'m> {
                 t: Real::NAN,
                 qu: vec![0.0; model.nq() + model.nu()],
             },
+            has_power: has_power(model),
         }
     }
 
@@ -86,13 +91,17 @@ impl OdeSystem for MotionSystem<'_> {
         forward_dynamics(self.model, &mut self.data, t, q, u).map_err(|e| Nested::from(e.at(t)))?;
         // `accelerate` and `power` leave the kinematics as they are.
         self.kinematics.t = t;
-        self.kinematics.qu.copy_from_slice(&y[..nqu]);
+        copy_short(&mut self.kinematics.qu, &y[..nqu]);
         self.kinematics.valid = true;
         self.persistent
             .accelerate(self.model, &mut self.data, (t, q, u))?;
         coordinate_rates(self.model, &self.data, u, &mut dy[..n]);
-        dy[n..nqu].copy_from_slice(self.data.udot.as_slice());
-        let p = power(self.model, &mut self.data);
+        copy_short(&mut dy[n..nqu], self.data.udot.as_slice());
+        let p = if self.has_power {
+            power(self.model, &mut self.data)
+        } else {
+            Power::default()
+        };
         dy[nqu] = p.damping;
         dy[nqu + 1] = p.applied;
         dy[nqu + 2] = p.drives;
