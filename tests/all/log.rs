@@ -474,15 +474,15 @@ fn every_chunk_holds_messages() {
     assert!(caught.is_err(), "the format 1 fixture passed the check");
 }
 
-/// Every LZ4 chunk is the LZ4 frame of its records as mcap 0.26.0 as published made it:
-/// its records fed to liblz4's frame encoder (level 0, no block checksum, content
-/// checksum) field by field. vendor/mcap gathers them in 64 KiB first (PATCHES.md); the
-/// frame must not change. Re-encoded here from the decompressed records in pieces of 1 to
+/// Every LZ4 chunk is the LZ4 frame of its records as mcap 0.26.0 as published made it,
+/// but for the content checksum: its records fed to liblz4's frame encoder (level 0, no
+/// block checksum, no content checksum: the chunk's CRC covers the same bytes) field by
+/// field. vendor/mcap gathers them in 64 KiB first (PATCHES.md); the frame must not change. Re-encoded here from the decompressed records in pieces of 1 to
 /// 40 bytes and in one write, chunks of one LZ4 block and of several (1 MiB), both must
 /// give the chunk's bytes; the records' CRC and size are the chunk header's.
 #[test]
 fn lz4_chunks_are_one_frame_of_their_records() {
-    use lz4::liblz4::BlockChecksum;
+    use lz4::liblz4::{BlockChecksum, ContentChecksum};
     use mcap::records::Record;
     use std::io::Read;
 
@@ -490,6 +490,7 @@ fn lz4_chunks_are_one_frame_of_their_records() {
         let mut enc = lz4::EncoderBuilder::new()
             .level(0)
             .block_checksum(BlockChecksum::NoBlockChecksum)
+            .checksum(ContentChecksum::NoChecksum)
             .build(Vec::new())
             .unwrap();
         let mut at = 0;
