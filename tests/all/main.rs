@@ -15,6 +15,7 @@ mod common;
 mod accumulation;
 mod articulated;
 mod broad_phase;
+mod chain_floor;
 mod cli_impact;
 mod cli_regress;
 mod cli_repair;
