@@ -29,7 +29,8 @@
 //!    by the rule: the one with the most open points (the least constraint). Both are
 //!    reported on the log with the time and the contact.
 
-use super::impact_map::pair_name;
+use std::fmt::Write as _;
+
 use super::observer::{PairMode, Transition};
 use super::persistent::{Candidate, Closed, Hold, Selection, pair_points};
 use super::{
@@ -56,22 +57,30 @@ const MAX_ROUNDS: usize = 100;
 /// The points an event names at instant `t` (`new`), with those of the events before it at
 /// the same instant (`|Δt| ≤ 1e-9 (1 + |t|)`), kept in `memo` (the instant and its points):
 /// a point already there (`same`) is not added again. See `lift_offs_at`, `slip_starts_at`.
-fn through_the_instant<T: Clone>(
+fn through_the_instant<T>(
     memo: &mut (Real, Vec<T>),
     t: Real,
     new: Option<T>,
     same: impl Fn(&T, &T) -> bool,
-) -> Vec<T> {
+) {
     let same_instant = (t - memo.0).abs() <= 1e-9 * (1.0 + t.abs());
     if !same_instant {
-        *memo = (t, Vec::new());
+        memo.0 = t;
+        memo.1.clear();
     }
     if let Some(p) = new
         && !memo.1.iter().any(|m| same(m, &p))
     {
         memo.1.push(p);
     }
-    memo.1.clone()
+}
+
+/// Writes the name of `pair`, `<collider a>/<collider b>` (`impact_map::pair_name`), into
+/// `out` after what it holds.
+fn write_pair_name(out: &mut String, model: &crate::model::Model, pair: PairId) {
+    let p = &model.pair_of(pair);
+    let name = |c: crate::model::ColliderId| &model.colliders()[c.index()].name;
+    let _ = write!(out, "{}/{}", name(p.a), name(p.b));
 }
 
 /// How many of its caps a disarmed pair's step cap lasts (see `disarm_open_crossing`):
@@ -129,7 +138,7 @@ impl Simulation<'_> {
     }
 
     /// The rounds at `t` on the state `y` (updated in place): whether anything changed,
-    /// and a stop reason.
+    /// and a stop reason. Works in the kept buffers of `self.scratch.rounds`.
     fn contacts_at(
         &mut self,
         t: Real,
@@ -137,11 +146,26 @@ impl Simulation<'_> {
         event: Option<&Event>,
         observer: &mut dyn Observer,
     ) -> Result<(bool, Option<StopReason>), SimError> {
+        let mut rounds = std::mem::take(&mut self.scratch.rounds);
+        let result = self.rounds(t, y, event, observer, &mut rounds);
+        self.scratch.rounds = rounds;
+        result
+    }
+
+    /// [`Self::contacts_at`] in the buffers `r`.
+    fn rounds(
+        &mut self,
+        t: Real,
+        y: &mut [Real],
+        event: Option<&Event>,
+        observer: &mut dyn Observer,
+        r: &mut Rounds,
+    ) -> Result<(bool, Option<StopReason>), SimError> {
         let mut changed = false;
         let mut impacts_here = 0usize;
         let mut painleve_resolved = false;
         // The impacts so far at this instant, group by group (see `coupling`).
-        let mut groups: Vec<GroupImpacts> = Vec::new();
+        r.groups.clear();
         let mut settled = false;
         // The instant's threshold lasts through every visit of the contact stage at `t`
         // (an event found again at once).
@@ -149,51 +173,56 @@ impl Simulation<'_> {
             self.unresolved = (t, 0.0);
         }
         for _ in 0..MAX_ROUNDS {
-            let mut touching = self.touching(t, y)?;
+            self.touching(t, y, &mut r.touching)?;
             if impacts_here > 0 {
-                self.leave_unresolved(&mut touching);
+                self.leave_unresolved(&mut r.touching);
             }
-            let group = (self.coupling).groups(self.model, touching.iter().map(|p| p.pair));
+            let touching = &r.touching;
+            let group = &mut r.group;
+            (self.coupling).groups(self.model, touching.iter().map(|p| p.pair), group);
             let approaching = |i: usize| touching[i].v_n < -touching[i].still;
             // 1. Impacts, in each group of coupled points with an approaching point; the
             // groups are separate problems.
-            let ids = super::coupling::distinct(
+            super::coupling::distinct(
                 (0..touching.len())
                     .filter(|&i| approaching(i))
                     .map(|i| group[i]),
+                &mut r.ids,
             );
-            if !ids.is_empty() {
+            if !r.ids.is_empty() {
                 if impacts_here == 0 {
                     self.sample(t, y, true, observer)?;
                 }
-                let mut events = Vec::new();
-                for id in ids {
-                    let members: Vec<Touch> = (0..touching.len())
-                        .filter(|&i| group[i] == id)
-                        .map(|i| touching[i])
-                        .collect();
-                    let k = match groups.iter().position(|g| g.id == id) {
+                r.events.clear();
+                for &id in &r.ids {
+                    r.members.clear();
+                    r.members.extend(
+                        (0..touching.len())
+                            .filter(|&i| group[i] == id)
+                            .map(|i| touching[i]),
+                    );
+                    let k = match r.groups.iter().position(|g| g.id == id) {
                         Some(k) => k,
                         None => {
-                            groups.push(GroupImpacts {
+                            r.groups.push(GroupImpacts {
                                 id,
                                 impacts: 0,
                                 ended: false,
                             });
-                            groups.len() - 1
+                            r.groups.len() - 1
                         }
                     };
-                    let mut state = groups[k];
-                    events.extend(self.group_impacts(t, y, &members, &mut state, observer)?);
-                    groups[k] = state;
+                    let mut state = r.groups[k];
+                    self.group_impacts(t, y, &r.members, &mut state, &mut r.events, observer)?;
+                    r.groups[k] = state;
                 }
                 changed = true;
                 // A round whose laws gave no impulse (points that approach by rounding
                 // noise only) goes on to the modes; it used to repeat until the rounds ran
                 // out, and the modes were not selected.
-                if !events.is_empty() {
-                    impacts_here += events.len();
-                    if let Some(stop) = self.ledger(t, events, observer)? {
+                if !r.events.is_empty() {
+                    impacts_here += r.events.len();
+                    if let Some(stop) = self.ledger(t, &mut r.events, observer)? {
                         return Ok((true, Some(stop)));
                     }
                     continue;
@@ -201,46 +230,60 @@ impl Simulation<'_> {
             }
             // The hops that start in the groups that had impacts (unless their
             // accumulation ended).
-            let hops: Vec<Touch> = (0..touching.len())
-                .filter(|&i| (groups.iter()).any(|g| g.id == group[i] && g.impacts > 0 && !g.ended))
-                .map(|i| touching[i])
-                .collect();
-            if !hops.is_empty() {
-                self.remember_hops(t, &hops);
+            r.members.clear();
+            r.members.extend(
+                (0..touching.len())
+                    .filter(|&i| {
+                        (r.groups.iter()).any(|g| g.id == group[i] && g.impacts > 0 && !g.ended)
+                    })
+                    .map(|i| touching[i]),
+            );
+            if !r.members.is_empty() {
+                self.remember_hops(t, &r.members);
             }
             // 3. Modes of the touching points that do not separate.
-            let resting: Vec<Touch> = (touching.iter())
-                .filter(|p| p.v_n <= p.still)
-                .copied()
-                .collect();
-            let (starts_to_slip, lifting) = if impacts_here == 0 {
-                (self.slip_starts_at(t, event), self.lift_offs_at(t, event))
+            r.resting.clear();
+            r.resting
+                .extend((touching.iter()).filter(|p| p.v_n <= p.still).copied());
+            // The points that start to slip and those that lift off at this instant (none
+            // after impacts), taken out of their memos for the selection.
+            if impacts_here == 0 {
+                self.slip_starts_at(t, event);
+                self.lift_offs_at(t, event);
+            }
+            let starts_to_slip = std::mem::take(&mut self.slip_starts.1);
+            let lifting = std::mem::take(&mut self.lift_offs.1);
+            let events: InstantEvents<'_> = if impacts_here == 0 {
+                (&starts_to_slip[..], &lifting[..])
             } else {
-                (Vec::new(), Vec::new())
+                (&[], &[])
             };
-            let events = (&starts_to_slip[..], &lifting[..]);
-            match self.select_modes(t, y, &resting, events, observer)? {
-                Selected::Set(closed) => {
+            let selected = self.select_modes(t, y, &r.resting, events, observer, &mut r.closed);
+            self.slip_starts.1 = starts_to_slip;
+            self.lift_offs.1 = lifting;
+            match selected? {
+                Selected::Set => {
                     let before = self.closed_on(event);
-                    changed |= self.set_closed(t, closed, observer)?;
+                    changed |= self.set_closed(t, &r.closed, observer)?;
                     if impacts_here == 0 && !painleve_resolved {
-                        self.disarm_open_crossing(event, before, &touching);
+                        self.disarm_open_crossing(event, before, &r.touching);
                     }
                     settled = true;
                     break;
                 }
                 Selected::Painleve(point) => {
                     if painleve_resolved {
+                        let mut name = String::new();
+                        write_pair_name(&mut name, self.model, point.pair);
                         return Err(SimError::Contact {
                             t,
                             message: format!(
-                                "Painlevé's paradox on {}: no consistent contact mode even after \
-                                 an impact without collision",
-                                pair_name(self.model, point.pair)
+                                "Painlevé's paradox on {name}: no consistent contact mode even \
+                                 after an impact without collision"
                             ),
                         });
                     }
-                    self.impact_without_collision(point, t, y, observer)?;
+                    self.impact_without_collision(point, t, y, &mut r.events, observer)?;
                     painleve_resolved = true;
                     changed = true;
                 }
@@ -355,34 +398,23 @@ impl Simulation<'_> {
     }
 
     /// Every contact point within the closed-contact tolerance at `(t, y)`, with its
-    /// velocities.
-    fn touching(&mut self, t: Real, y: &[Real]) -> Result<Vec<Touch>, SimError> {
+    /// velocities, into `out`.
+    fn touching(&mut self, t: Real, y: &[Real], out: &mut Vec<Touch>) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let (q, u) = (&y[..n], &y[n..nqu]);
         update_positions(self.model, &mut self.sampler, t, q).map_err(|e| e.at(t))?;
         update_velocities(self.model, &mut self.sampler, u).map_err(|e| e.at(t))?;
-        let mut ws = ManifoldWorkspace::default();
-        let mut out = Vec::new();
+        out.clear();
         // The pairs within the tolerance of contact are among those whose boxes, grown by
         // it, overlap (the broad phase).
-        for pair in self.near_pairs(t, self.scales.gap_tol)? {
-            for (contact, local) in pair_points(
-                self.model,
-                &self.sampler,
-                pair,
-                self.scales.gap_tol,
-                &mut ws,
-            )? {
-                let frame = self.map.frame_perp(self.model, (pair, contact), t, q, u)?;
-                out.push(Touch {
-                    pair,
-                    contact,
-                    local,
-                    v_n: frame.v_n(),
-                    still: self.scales.v_tiny.max(self.unresolved.1),
-                });
-            }
-        }
+        let mut near = std::mem::take(&mut self.scratch.near);
+        let mut ws = std::mem::take(&mut self.scratch.manifolds);
+        let result = self
+            .near_pairs(t, self.scales.gap_tol, &mut near)
+            .and_then(|()| self.touching_of(t, q, u, &near, &mut ws, out));
+        self.scratch.near = near;
+        self.scratch.manifolds = ws;
+        result?;
         // The points held closed: the touching point of its pair nearest each closed point.
         for c in self.gaps.persistent.closed() {
             let nearest = (out.iter_mut())
@@ -396,40 +428,74 @@ impl Simulation<'_> {
                 p.still = self.scales.v_drift;
             }
         }
-        Ok(out)
+        Ok(())
+    }
+
+    /// The contact points of the `near` pairs within the closed-contact tolerance (the
+    /// positions and velocities of `self.sampler`), into `out`.
+    fn touching_of(
+        &mut self,
+        t: Real,
+        q: &[Real],
+        u: &[Real],
+        near: &[PairId],
+        ws: &mut ManifoldWorkspace,
+        out: &mut Vec<Touch>,
+    ) -> Result<(), SimError> {
+        for &pair in near {
+            for (contact, local) in
+                pair_points(self.model, &self.sampler, pair, self.scales.gap_tol, ws)?
+            {
+                let frame = self.map.frame_perp(self.model, (pair, contact), t, q, u)?;
+                out.push(Touch {
+                    pair,
+                    contact,
+                    local,
+                    v_n: frame.v_n(),
+                    still: self.scales.v_tiny.max(self.unresolved.1),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// The touching points that do not separate faster than `bound` (or than they drift),
-    /// with their materials.
+    /// with their materials, into `out`.
     fn points_below(
         &self,
         touching: &[Touch],
         bound: Real,
-    ) -> Vec<(PairId, PairContact, Material)> {
-        (touching.iter())
-            .filter(|p| p.v_n <= bound.max(p.still))
-            .map(|p| (p.pair, p.contact, self.material(p.pair)))
-            .collect()
+        out: &mut Vec<(PairId, PairContact, Material)>,
+    ) {
+        out.clear();
+        out.extend(
+            (touching.iter())
+                .filter(|p| p.v_n <= bound.max(p.still))
+                .map(|p| (p.pair, p.contact, self.material(p.pair))),
+        );
     }
 
-    /// Records impacts in the ledger and the audit, and reports them. A stop reason if
-    /// impacts stall.
+    /// Records impacts in the ledger and the audit, and reports them (`events` is left
+    /// empty). A stop reason if impacts stall.
     fn ledger(
         &mut self,
         t: Real,
-        events: Vec<ImpactEvent>,
+        events: &mut Vec<ImpactEvent>,
         observer: &mut dyn Observer,
     ) -> Result<Option<StopReason>, SimError> {
-        for mut ev in events {
+        for ev in events.iter_mut() {
             ev.index = self.counters.impacts;
             self.counters.impacts += 1;
             self.audit.impact_delta_e += ev.outcome.delta_e;
             self.audit.impact_prescribed_work += ev.prescribed_work();
-            observer.impact(self.model, &ev).map_err(|e| e.at(t))?;
+            observer.impact(self.model, ev).map_err(|e| e.at(t))?;
             if let Some(reason) = self.guard.after_impact(t) {
-                return Ok(Some(self.stall(t, ev.frame.pair, reason)));
+                let pair = ev.frame.pair;
+                events.clear();
+                return Ok(Some(self.stall(t, pair, reason)));
             }
         }
+        events.clear();
         Ok(None)
     }
 
@@ -449,8 +515,8 @@ impl Simulation<'_> {
     }
 
     /// The impacts of one group of coupled points at `t` (`touching`: the group's touching
-    /// points, some approaching), with the accumulations they end; `u` (in `y`) becomes
-    /// `u⁺`. `state` counts the group's impacts at this instant.
+    /// points, some approaching), with the accumulations they end, appended to `events`;
+    /// `u` (in `y`) becomes `u⁺`. `state` counts the group's impacts at this instant.
     ///
     /// Which law: a point that approaches alone, as the first impact of its group at this
     /// instant (or with no other point of the group touching), gets the scene's one-point
@@ -465,85 +531,121 @@ impl Simulation<'_> {
         y: &mut [Real],
         touching: &[Touch],
         state: &mut GroupImpacts,
+        events: &mut Vec<ImpactEvent>,
         observer: &mut dyn Observer,
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+    ) -> Result<(), SimError> {
+        let mut g = std::mem::take(&mut self.scratch.group);
+        let result = self.group_impacts_in(t, y, touching, state, events, observer, &mut g);
+        self.scratch.group = g;
+        result
+    }
+
+    /// [`Self::group_impacts`] in the buffers `g`.
+    #[allow(clippy::too_many_arguments)]
+    fn group_impacts_in(
+        &mut self,
+        t: Real,
+        y: &mut [Real],
+        touching: &[Touch],
+        state: &mut GroupImpacts,
+        events: &mut Vec<ImpactEvent>,
+        observer: &mut dyn Observer,
+        g: &mut GroupScratch,
+    ) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
-        let approaching: Vec<Touch> = (touching.iter())
-            .filter(|p| p.v_n < -p.still)
-            .copied()
-            .collect();
+        let start = events.len();
+        let approaching = &mut g.approaching;
+        approaching.clear();
+        approaching.extend((touching.iter()).filter(|p| p.v_n < -p.still).copied());
         let sequential = self.settings.simultaneous == Simultaneous::Sequential;
         let chosen = if sequential {
             (approaching.iter())
                 .min_by(|a, b| a.v_n.total_cmp(&b.v_n))
                 .copied()
         } else {
+            let v_tiny = self.scales.v_tiny;
             let alone = approaching.len() == 1
                 && (state.impacts == 0
-                    || self.points_below(touching, self.scales.v_tiny).len() == 1);
+                    || (touching.iter())
+                        .filter(|p| p.v_n <= v_tiny.max(p.still))
+                        .count()
+                        == 1);
             alone.then(|| approaching[0])
         };
-        let u_before = y[n..nqu].to_vec();
+        let approaching = approaching.len();
+        g.u_before.clear();
+        g.u_before.extend_from_slice(&y[n..nqu]);
         // Once an accumulation ended at this instant, the impacts in cascade that follow
         // (the other end of a rod landing flat) are plastic too.
-        let mut events = self.impact_round(
-            t,
-            y,
-            touching,
-            approaching.len(),
-            chosen,
-            state.ended,
-            observer,
-        )?;
+        let ended = state.ended;
+        self.impact_round(t, y, touching, approaching, chosen, ended, events, observer)?;
         // 2. Accumulations: an impact that leaves a touching point separating too slowly
         // for its hop to be resolved is made plastic.
         if !state.ended {
-            let after = self.touching_in(t, y, state.id)?;
-            let slow = self.slow_separations(t, y, &after)?;
-            if !slow.is_empty() {
-                self.note_accumulations(t, &slow);
-                y[n..nqu].copy_from_slice(&u_before);
+            self.touching_in(t, y, state.id, &mut g.after)?;
+            self.slow_separations(t, y, &g.after, &mut g.slow)?;
+            if !g.slow.is_empty() {
+                self.note_accumulations(t, &g.slow);
+                y[n..nqu].copy_from_slice(&g.u_before);
                 // A slow separation elsewhere than at the struck point: the plastic impact
                 // takes the whole group (the generalized law), or stays one point at a time.
                 let chosen = if sequential {
                     chosen
                 } else {
-                    chosen.filter(|c| slow.iter().all(|p| p.pair == c.pair))
+                    chosen.filter(|c| g.slow.iter().all(|p| p.pair == c.pair))
                 };
-                events =
-                    self.impact_round(t, y, touching, approaching.len(), chosen, true, observer)?;
+                events.truncate(start);
+                self.impact_round(t, y, touching, approaching, chosen, true, events, observer)?;
                 state.ended = true;
                 // A rocking body: the plastic impact lifts another touching point, too
                 // slowly to resolve; no impulse ≥ 0 holds it down.
-                let after = self.touching_in(t, y, state.id)?;
-                if !self.slow_separations(t, y, &after)?.is_empty() {
-                    let held: Vec<Touch> = (after.iter())
-                        .filter(|p| p.v_n <= self.scales.v_rest.max(p.still))
-                        .copied()
-                        .collect();
-                    events.extend(self.rocking_end(t, y, held)?);
+                self.touching_in(t, y, state.id, &mut g.after)?;
+                self.slow_separations(t, y, &g.after, &mut g.slow)?;
+                if !g.slow.is_empty() {
+                    g.held.clear();
+                    g.held.extend(
+                        (g.after.iter())
+                            .filter(|p| p.v_n <= self.scales.v_rest.max(p.still))
+                            .copied(),
+                    );
+                    self.rocking_end(t, y, &mut g.held, events)?;
                 }
             }
         }
-        state.impacts += events.len();
-        Ok(events)
+        state.impacts += events.len() - start;
+        Ok(())
     }
 
-    /// The touching points at `(t, y)` of the group `id` of coupled points.
-    fn touching_in(&mut self, t: Real, y: &[Real], id: usize) -> Result<Vec<Touch>, SimError> {
-        let touching = self.touching(t, y)?;
-        let group = (self.coupling).groups(self.model, touching.iter().map(|p| p.pair));
-        Ok((touching.into_iter().zip(group))
-            .filter(|(_, g)| *g == id)
-            .map(|(p, _)| p)
-            .collect())
+    /// The touching points at `(t, y)` of the group `id` of coupled points, into `out`.
+    fn touching_in(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        id: usize,
+        out: &mut Vec<Touch>,
+    ) -> Result<(), SimError> {
+        let mut all = std::mem::take(&mut self.scratch.all);
+        let mut group = std::mem::take(&mut self.scratch.all_groups);
+        let result = self.touching(t, y, &mut all);
+        if result.is_ok() {
+            (self.coupling).groups(self.model, all.iter().map(|p| p.pair), &mut group);
+            out.clear();
+            out.extend(
+                (all.iter().zip(&group))
+                    .filter(|(_, g)| **g == id)
+                    .map(|(p, _)| *p),
+            );
+        }
+        self.scratch.all = all;
+        self.scratch.all_groups = group;
+        result
     }
 
     /// One round of impacts at `t` on the `touching` points of a group, `approaching` of
-    /// them approaching: the one-point law of the scene on `chosen`, else Moreau's
-    /// generalized Newton law over the touching points that do not separate; `u` (in `y`)
-    /// becomes `u⁺`. `plastic`: the same law with `e = 0`, reported as the end of an
-    /// accumulation.
+    /// them approaching, appended to `events`: the one-point law of the scene on `chosen`,
+    /// else Moreau's generalized Newton law over the touching points that do not separate;
+    /// `u` (in `y`) becomes `u⁺`. `plastic`: the same law with `e = 0`, reported as the end
+    /// of an accumulation.
     #[allow(clippy::too_many_arguments)]
     fn impact_round(
         &mut self,
@@ -553,83 +655,97 @@ impl Simulation<'_> {
         approaching: usize,
         chosen: Option<Touch>,
         plastic: bool,
+        events: &mut Vec<ImpactEvent>,
         observer: &mut dyn Observer,
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+    ) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let plastic_material = |m: Material| if plastic { Material { e: 0.0, ..m } } else { m };
-        let mut points = self.points_below(touching, self.scales.v_tiny);
-        for p in &mut points {
-            p.2 = plastic_material(p.2);
-        }
+        let start = events.len();
         let (q, u) = y[..nqu].split_at_mut(n);
-        let mut events: Vec<ImpactEvent> = if let Some(p) = chosen {
+        if let Some(p) = chosen {
             let material = plastic_material(self.material(p.pair));
             let ev = self
                 .map
                 .apply_at(self.model, (p.pair, p.contact), material, None, t, q, u)?;
-            ev.into_iter().collect()
+            events.extend(ev);
         } else {
             // Several points approach at once, or an impact made another touching point
             // approach (a rod landing on one end strikes with the other).
+            let mut points = std::mem::take(&mut self.scratch.points);
+            self.points_below(touching, self.scales.v_tiny, &mut points);
+            for p in &mut points {
+                p.2 = plastic_material(p.2);
+            }
+            let mut result = Ok(());
             if !plastic {
                 let what = if approaching > 1 {
                     "simultaneous impact"
                 } else {
                     "impacts in cascade at one instant"
                 };
-                observer
-                    .message(
-                        t,
-                        Level::Warning,
-                        &format!(
-                            "{what} of {} contact points: Moreau's generalized Newton law with \
-                             Coulomb friction",
-                            points.len()
-                        ),
-                    )
-                    .map_err(|e| e.at(t))?;
+                let text = &mut self.scratch.text;
+                text.clear();
+                let _ = write!(
+                    text,
+                    "{what} of {} contact points: Moreau's generalized Newton law with \
+                     Coulomb friction",
+                    points.len()
+                );
+                result = observer
+                    .message(t, Level::Warning, text)
+                    .map_err(|e| e.at(t));
             }
-            self.map.apply_many(self.model, &points, t, q, u)?
-        };
+            let result = result.and_then(|()| self.map.apply_many(self.model, &points, t, q, u));
+            self.scratch.points = points;
+            events.extend(result?);
+        }
         if plastic {
-            for ev in &mut events {
+            for ev in &mut events[start..] {
                 ev.cause = ImpactCause::AccumulationEnd;
             }
         }
-        Ok(events)
+        Ok(())
     }
 
     /// The touching points of `after` (at `(t, y)`, just after an impact) that separate,
     /// but slower than their resting speed ([`super::Scales::v_rest_at`] of their normal
-    /// acceleration with no contact force): the hops they start are too small to resolve.
+    /// acceleration with no contact force), into `slow`: the hops they start are too small
+    /// to resolve.
     fn slow_separations(
         &mut self,
         t: Real,
         y: &[Real],
         after: &[Touch],
-    ) -> Result<Vec<Touch>, SimError> {
+        slow: &mut Vec<Touch>,
+    ) -> Result<(), SimError> {
         // Only points slower than the resting speed of a thousand times |g| are candidates.
         let cap = 1e3_f64.sqrt() * self.scales.v_rest;
-        let candidates: Vec<Touch> = (after.iter())
-            .filter(|p| p.v_n > p.still && p.v_n <= cap)
-            .copied()
-            .collect();
-        if candidates.is_empty() {
-            return Ok(candidates);
+        slow.clear();
+        slow.extend(
+            (after.iter())
+                .filter(|p| p.v_n > p.still && p.v_n <= cap)
+                .copied(),
+        );
+        if slow.is_empty() {
+            return Ok(());
         }
-        let points: Vec<Candidate> = (candidates.iter())
-            .map(|p| Candidate {
-                pair: p.pair,
-                local: p.local,
-                mu: 0.0,
-                slip: None,
-            })
-            .collect();
-        let sel = self.select_at(t, y, &points, Real::INFINITY)?;
-        Ok((candidates.iter().zip(&sel.free))
-            .filter(|(p, a_n)| p.v_n <= self.scales.v_rest_at(**a_n))
-            .map(|(p, _)| *p)
-            .collect())
+        let mut points = std::mem::take(&mut self.scratch.candidates);
+        points.clear();
+        points.extend(slow.iter().map(|p| Candidate {
+            pair: p.pair,
+            local: p.local,
+            mu: 0.0,
+            slip: None,
+        }));
+        let sel = self.select_at(t, y, &points, Real::INFINITY);
+        self.scratch.candidates = points;
+        let sel = sel?;
+        let mut free = sel.free.iter();
+        slow.retain(|p| {
+            free.next()
+                .is_some_and(|a_n| p.v_n <= self.scales.v_rest_at(*a_n))
+        });
+        Ok(())
     }
 
     /// The end of a rocking accumulation at `t` (`u` in `y` just after the plastic impact
@@ -651,25 +767,46 @@ impl Simulation<'_> {
         &mut self,
         t: Real,
         y: &mut [Real],
-        mut held: Vec<Touch>,
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+        held: &mut Vec<Touch>,
+        events: &mut Vec<ImpactEvent>,
+    ) -> Result<(), SimError> {
+        let mut r = std::mem::take(&mut self.scratch.rocking);
+        let result = self.rocking_end_in(t, y, held, events, &mut r);
+        self.scratch.rocking = r;
+        result
+    }
+
+    /// [`Self::rocking_end`] in the buffers `r`.
+    fn rocking_end_in(
+        &mut self,
+        t: Real,
+        y: &mut [Real],
+        held: &mut Vec<Touch>,
+        events: &mut Vec<ImpactEvent>,
+        r: &mut RockingScratch,
+    ) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
-        let u_plastic = y[n..nqu].to_vec();
-        let mut released: Vec<Touch> = Vec::new();
+        r.u_plastic.clear();
+        r.u_plastic.extend_from_slice(&y[n..nqu]);
+        r.released.clear();
         // The slip each held point is made to take (`None`: the jump decides).
-        let mut slides: Vec<Option<Real>> = vec![None; held.len()];
+        let slides = &mut r.slides;
+        slides.clear();
+        slides.resize(held.len(), None);
         // A bound on the rounds (a point released, held again, made to slip…); the last
         // jump stands.
         let last = 3 * held.len();
         let mut round = 0;
-        let mut best: Option<(Real, Vec<Real>, Vec<ImpactEvent>)> = None;
+        // The violation of the round that came closest to the conditions so far, its
+        // `u` in `r.best_u` and its entries in `r.best`.
+        let mut best: Option<Real> = None;
         loop {
             // Every held point, in order (`slides` is indexed like `held`).
-            let points = self.points_below(&held, Real::INFINITY);
+            self.points_below(held, Real::INFINITY, &mut r.points);
             let (q, u) = y[..nqu].split_at_mut(n);
             let mut closing =
-                (self.map).close(self.model, &points, &slides, self.scales.v_rest, t, q, u)?;
-            self.support(t, y, &held, &mut closing)?;
+                (self.map).close(self.model, &r.points, slides, self.scales.v_rest, t, q, u)?;
+            self.support(t, y, held, &mut closing)?;
             let nearest = |p: Vec2, set: &[Touch]| {
                 (0..set.len()).min_by(|&i, &j| {
                     let d = |k: usize| (set[k].contact.point_a - p).length();
@@ -677,46 +814,43 @@ impl Simulation<'_> {
                 })
             };
             // The held point of each entry.
-            let of_entry: Vec<Option<usize>> = (closing.iter())
-                .map(|ev| nearest(ev.frame.point(), &held))
-                .collect();
-            let pulled: Vec<usize> = {
-                let mut idx: Vec<usize> = (closing.iter().zip(&of_entry))
+            r.of_entry.clear();
+            (r.of_entry).extend((closing.iter()).map(|ev| nearest(ev.frame.point(), held)));
+            let pulled = &mut r.pulled;
+            pulled.clear();
+            pulled.extend(
+                (closing.iter().zip(&r.of_entry))
                     .filter(|(ev, _)| ev.impulse().n < 0.0)
-                    .filter_map(|(_, k)| *k)
-                    .collect();
-                idx.sort_unstable();
-                idx.dedup();
-                idx
-            };
+                    .filter_map(|(_, k)| *k),
+            );
+            pulled.sort_unstable();
+            pulled.dedup();
             // Released points the jump made approach are held again.
-            let approaching: Vec<usize> = if released.is_empty() {
-                Vec::new()
-            } else {
-                let now = self.touching(t, y)?;
-                (0..released.len())
-                    .filter(|&i| {
-                        let r = &released[i];
-                        (now.iter())
-                            .filter(|p| p.pair == r.pair)
-                            .min_by(|a, b| {
-                                let d = |p: &Touch| (p.local - r.local).length();
-                                d(a).total_cmp(&d(b))
-                            })
-                            .is_some_and(|p| p.v_n < -p.still)
-                    })
-                    .collect()
-            };
+            r.approaching.clear();
+            if !r.released.is_empty() {
+                self.touching(t, y, &mut r.now)?;
+                let (now, released) = (&r.now, &r.released);
+                r.approaching.extend((0..released.len()).filter(|&i| {
+                    let rel = &released[i];
+                    (now.iter())
+                        .filter(|p| p.pair == rel.pair)
+                        .min_by(|a, b| {
+                            let d = |p: &Touch| (p.local - rel.local).length();
+                            d(a).total_cmp(&d(b))
+                        })
+                        .is_some_and(|p| p.v_n < -p.still)
+                }));
+            }
             // Stopped points whose entry is outside the cone, and the slip they take.
-            let outside: Vec<(usize, Real)> = (closing.iter().zip(&of_entry))
-                .filter_map(|(ev, k)| {
+            r.outside.clear();
+            r.outside
+                .extend((closing.iter().zip(&r.of_entry)).filter_map(|(ev, k)| {
                     let (i, mu) = (ev.impulse(), ev.material.mu);
                     let slack = 4.0 * Real::EPSILON * (i.n.abs() + i.t.abs());
                     let k = (*k)?;
                     (slides[k].is_none() && i.t.abs() > mu * i.n + slack)
                         .then(|| (k, -i.t.signum()))
-                })
-                .collect();
+                }));
             let released_all = pulled.is_empty() || pulled.len() == held.len();
             // How far the entries are from impulses ≥ 0 in the cone, and from leaving no
             // touching point approaching (N·s; m/s for those).
@@ -726,38 +860,39 @@ impl Simulation<'_> {
                     (-i.n).max(0.0) + (i.t.abs() - ev.material.mu * i.n).max(0.0)
                 })
                 .sum::<Real>()
-                + if approaching.is_empty() {
+                + if r.approaching.is_empty() {
                     0.0
                 } else {
                     Real::INFINITY
                 };
-            if best.as_ref().is_none_or(|b| violation < b.0) {
-                best = Some((violation, y[n..nqu].to_vec(), closing.clone()));
+            if best.is_none_or(|b| violation < b) {
+                best = Some(violation);
+                r.best_u.clear();
+                r.best_u.extend_from_slice(&y[n..nqu]);
+                r.best = closing;
             }
-            if round == last || (approaching.is_empty() && released_all && outside.is_empty()) {
+            if round == last || (r.approaching.is_empty() && released_all && r.outside.is_empty()) {
                 // The round that came closest to the conditions (this one, unless an
                 // earlier one came closer).
-                if let Some((_, u_best, best)) = best {
-                    y[n..nqu].copy_from_slice(&u_best);
-                    return Ok(best);
-                }
-                return Ok(closing);
-            } else if !approaching.is_empty() {
-                for &i in approaching.iter().rev() {
-                    held.push(released.remove(i));
+                y[n..nqu].copy_from_slice(&r.best_u);
+                events.append(&mut r.best);
+                return Ok(());
+            } else if !r.approaching.is_empty() {
+                for &i in r.approaching.iter().rev() {
+                    held.push(r.released.remove(i));
                     slides.push(None);
                 }
             } else if !released_all {
                 for &i in pulled.iter().rev() {
-                    released.push(held.remove(i));
+                    r.released.push(held.remove(i));
                     slides.remove(i);
                 }
             } else {
-                for &(k, s) in &outside {
+                for &(k, s) in &r.outside {
                     slides[k] = Some(s);
                 }
             }
-            y[n..nqu].copy_from_slice(&u_plastic);
+            y[n..nqu].copy_from_slice(&r.u_plastic);
             round += 1;
         }
     }
@@ -784,16 +919,18 @@ impl Simulation<'_> {
             .filter(|ev| ev.v_a.n > 0.0)
             .map(|ev| ev.v_a.n)
             .fold(0.0, Real::max);
-        let candidates: Vec<Candidate> = (held.iter())
-            .map(|p| Candidate {
-                pair: p.pair,
-                local: p.local,
-                mu: self.material(p.pair).mu,
-                slip: None,
-            })
-            .collect();
-        let sel = self.select_at(t, y, &candidates, 1e3 * self.scales.v_tiny)?;
-        let Some(&chosen) = most_open(&sel.solutions).first() else {
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        candidates.clear();
+        candidates.extend(held.iter().map(|p| Candidate {
+            pair: p.pair,
+            local: p.local,
+            mu: self.material(p.pair).mu,
+            slip: None,
+        }));
+        let sel = self.select_at(t, y, &candidates, 1e3 * self.scales.v_tiny);
+        self.scratch.candidates = candidates;
+        let sel = sel?;
+        let Some(chosen) = most_open_first(&sel.solutions) else {
             return Err(SimError::Contact {
                 t,
                 message: "the end of a rocking accumulation: the closed contacts have no \
@@ -836,14 +973,15 @@ impl Simulation<'_> {
     /// bouncing ball; the small-amplitude limit of rocking). The passage to persistent
     /// contact is reported at `t∞` ([`Self::set_closed`]).
     fn note_accumulations(&mut self, t: Real, slow: &[Touch]) {
-        let mut pairs: Vec<(PairId, Real)> = Vec::new();
+        let mut pairs = std::mem::take(&mut self.scratch.accumulations);
+        pairs.clear();
         for p in slow {
             match pairs.iter_mut().find(|(pair, _)| *pair == p.pair) {
                 Some((_, v)) => *v = v.max(p.v_n),
                 None => pairs.push((p.pair, p.v_n)),
             }
         }
-        for (pair, v) in pairs {
+        for &(pair, v) in &pairs {
             let k = pair.index();
             let extrapolated = match self.last_separation[k] {
                 Some((t_prev, v_prev)) if t_prev < t && v < v_prev => {
@@ -852,27 +990,15 @@ impl Simulation<'_> {
                 }
                 _ => None,
             };
-            // Without a previous hop to extrapolate from, t∞ is unknown: say so rather
-            // than print NaN, and stamp the passage at t.
-            let end = match extrapolated {
-                Some((t_inf, r)) => {
-                    format!("the hops would end at t∞ = {t_inf} s (extrapolated, ratio {r:.4})")
-                }
-                None => {
-                    "the end of the hops is unknown (no earlier hop to extrapolate from)".to_owned()
-                }
-            };
-            let note = format!(
-                "accumulation of impacts: the hop after the impact at t = {t} s ({v:.3e} m/s) \
-                 is below the resting speed; the impact is made plastic (e = 0, with its \
-                 friction) and the contact stays closed; {end}"
-            );
             self.accumulating[k] = Some(Accumulation {
                 t_inf: extrapolated.map(|x| x.0),
-                note,
+                t,
+                v,
+                ratio: extrapolated.map(|x| x.1),
             });
             self.last_separation[k] = None;
         }
+        self.scratch.accumulations = pairs;
     }
 
     /// The mode selection of `candidates` at `(t, y)` ([`Persistent::select`] on the
@@ -946,10 +1072,10 @@ impl Simulation<'_> {
         Some((pair, c.local))
     }
 
-    /// The points that lift off at this instant: the point of `event` if its normal force
-    /// crossed zero, with those of the events before it at the same instant (`|Δt| ≤
-    /// 1e-9 (1 + |t|)`); see `open_lifting_points`.
-    fn lift_offs_at(&mut self, t: Real, event: Option<&Event>) -> Vec<(PairId, Vec2)> {
+    /// The points that lift off at this instant, into `self.lift_offs`: the point of `event`
+    /// if its normal force crossed zero, with those of the events before it at the same
+    /// instant (`|Δt| ≤ 1e-9 (1 + |t|)`); see `open_lifting_points`.
+    fn lift_offs_at(&mut self, t: Real, event: Option<&Event>) {
         let lift = self.lifts_off(event);
         let near = self.scales.gap_tol;
         through_the_instant(&mut self.lift_offs, t, lift, |a, b| {
@@ -957,14 +1083,14 @@ impl Simulation<'_> {
         })
     }
 
-    /// The points that start to slip at this instant: the point of `event` if it is a
-    /// sticking point at the edge of its cone, with those of the events before it at the
-    /// same instant (`|Δt| ≤ 1e-9 (1 + |t|)`). A point that started to slip keeps its slip
-    /// through the instant: otherwise two points at the edge of their cones, sharing one
-    /// load (a link lying on the floor, hinged to its neighbour), took turns — each
-    /// selection let the other one stick at its edge, whose slip event came at once (the
-    /// 8-link chain stalled at t = 4.8315 s, 1000 events).
-    fn slip_starts_at(&mut self, t: Real, event: Option<&Event>) -> Vec<(PairId, Vec2, Real)> {
+    /// The points that start to slip at this instant, into `self.slip_starts`: the point of
+    /// `event` if it is a sticking point at the edge of its cone, with those of the events
+    /// before it at the same instant (`|Δt| ≤ 1e-9 (1 + |t|)`). A point that started to
+    /// slip keeps its slip through the instant: otherwise two points at the edge of their
+    /// cones, sharing one load (a link lying on the floor, hinged to its neighbour), took
+    /// turns — each selection let the other one stick at its edge, whose slip event came at
+    /// once (the 8-link chain stalled at t = 4.8315 s, 1000 events).
+    fn slip_starts_at(&mut self, t: Real, event: Option<&Event>) {
         let start = self.starts_to_slip(event);
         let near = self.scales.gap_tol;
         through_the_instant(&mut self.slip_starts, t, start, |a, b| {
@@ -973,7 +1099,8 @@ impl Simulation<'_> {
     }
 
     /// Selects the modes of the resting points, group by group of coupled points (each a
-    /// separate problem, see `coupling`); the closed points in the order of `resting`.
+    /// separate problem, see `coupling`); the closed points, in the order of `resting`, into
+    /// `closed`.
     fn select_modes(
         &mut self,
         t: Real,
@@ -981,49 +1108,98 @@ impl Simulation<'_> {
         resting: &[Touch],
         events: InstantEvents<'_>,
         observer: &mut dyn Observer,
+        closed: &mut Vec<Closed>,
     ) -> Result<Selected, SimError> {
-        let group = (self.coupling).groups(self.model, resting.iter().map(|p| p.pair));
-        let ids = super::coupling::distinct(group.iter().copied());
-        if ids.len() <= 1 {
-            return self.select_group(t, y, resting, events, observer);
-        }
-        let mut closed: Vec<(usize, Closed)> = Vec::new();
-        for id in ids {
-            let index: Vec<usize> = (0..resting.len()).filter(|&i| group[i] == id).collect();
-            let members: Vec<Touch> = index.iter().map(|&i| resting[i]).collect();
-            match self.select_group(t, y, &members, events, observer)? {
-                Selected::Set(set) => {
-                    for c in set {
-                        let at = (index.iter().copied())
+        let mut g = std::mem::take(&mut self.scratch.select);
+        (self.coupling).groups(self.model, resting.iter().map(|p| p.pair), &mut g.group);
+        super::coupling::distinct(g.group.iter().copied(), &mut g.ids);
+        let result = if g.ids.len() <= 1 {
+            self.select_group(t, y, resting, events, observer, closed)
+        } else {
+            self.select_groups(t, y, resting, events, observer, closed, &mut g)
+        };
+        self.scratch.select = g;
+        result
+    }
+
+    /// [`Self::select_modes`] of several groups, in the buffers `g` (`g.group`: the group
+    /// of each resting point, `g.ids` the groups).
+    #[allow(clippy::too_many_arguments)]
+    fn select_groups(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        resting: &[Touch],
+        events: InstantEvents<'_>,
+        observer: &mut dyn Observer,
+        closed: &mut Vec<Closed>,
+        g: &mut SelectScratch,
+    ) -> Result<Selected, SimError> {
+        // Each closed point with its resting point and the order it came in (which breaks
+        // the ties of the points not found, as a stable sort would).
+        g.sorted.clear();
+        for &id in &g.ids {
+            g.index.clear();
+            (g.index).extend((0..resting.len()).filter(|&i| g.group[i] == id));
+            g.members.clear();
+            (g.members).extend(g.index.iter().map(|&i| resting[i]));
+            match self.select_group(t, y, &g.members, events, observer, &mut g.set)? {
+                Selected::Set => {
+                    for &c in &g.set {
+                        let at = (g.index.iter().copied())
                             .find(|&i| resting[i].pair == c.pair && resting[i].local == c.local)
                             .unwrap_or(usize::MAX);
-                        closed.push((at, c));
+                        g.sorted.push((at, g.sorted.len(), c));
                     }
                 }
                 painleve => return Ok(painleve),
             }
         }
-        closed.sort_by_key(|c| c.0);
-        Ok(Selected::Set(closed.into_iter().map(|c| c.1).collect()))
+        g.sorted.sort_unstable_by_key(|c| (c.0, c.1));
+        closed.clear();
+        closed.extend(g.sorted.iter().map(|c| c.2));
+        Ok(Selected::Set)
     }
 
-    /// Selects the modes of the resting points of one group. The points of `starts_to_slip`
-    /// (sticking points at the edge of their friction cones) may open or slide, not stick:
-    /// at the event both are consistent to rounding, and sticking would cross the edge
-    /// again at once.
+    /// Selects the modes of the resting points of one group; the closed points into
+    /// `closed`. The points of `starts_to_slip` (sticking points at the edge of their
+    /// friction cones) may open or slide, not stick: at the event both are consistent to
+    /// rounding, and sticking would cross the edge again at once.
     fn select_group(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        resting: &[Touch],
+        events: InstantEvents<'_>,
+        observer: &mut dyn Observer,
+        closed: &mut Vec<Closed>,
+    ) -> Result<Selected, SimError> {
+        closed.clear();
+        if resting.is_empty() {
+            return Ok(Selected::Set);
+        }
+        let mut g = std::mem::take(&mut self.scratch.select_group);
+        let result = self.select_group_in(t, y, resting, events, observer, closed, &mut g);
+        self.scratch.select_group = g;
+        result
+    }
+
+    /// [`Self::select_group`] of a non-empty group, in the buffers `g`.
+    #[allow(clippy::too_many_arguments)]
+    fn select_group_in(
         &mut self,
         t: Real,
         y: &[Real],
         resting: &[Touch],
         (starts_to_slip, lifting): InstantEvents<'_>,
         observer: &mut dyn Observer,
+        closed: &mut Vec<Closed>,
+        g: &mut GroupSelectScratch,
     ) -> Result<Selected, SimError> {
-        if resting.is_empty() {
-            return Ok(Selected::Set(vec![]));
-        }
         // For each point that starts to slip, the resting point nearest it, and its slip.
-        let mut slips: Vec<Option<Real>> = vec![None; resting.len()];
+        let slips = &mut g.slips;
+        slips.clear();
+        slips.resize(resting.len(), None);
         for &(pair, local, s) in starts_to_slip {
             let nearest = (0..resting.len())
                 .filter(|&i| resting[i].pair == pair)
@@ -1036,25 +1212,32 @@ impl Simulation<'_> {
                 slips[i] = Some(s);
             }
         }
-        let candidates: Vec<Candidate> = (resting.iter().zip(&slips))
-            .map(|(p, slip)| Candidate {
+        let mut candidates = std::mem::take(&mut self.scratch.candidates);
+        candidates.clear();
+        candidates.extend(
+            (resting.iter().zip(slips.iter())).map(|(p, slip)| Candidate {
                 pair: p.pair,
                 local: p.local,
                 mu: self.material(p.pair).mu,
                 slip: *slip,
-            })
-            .collect();
+            }),
+        );
         let v_slip = 1e3 * self.scales.v_tiny;
-        let mut sel = self.select_at(t, y, &candidates, v_slip)?;
+        let sel = self.select_at(t, y, &candidates, v_slip);
+        self.scratch.candidates = candidates;
+        let mut sel = sel?;
         // A point that starts to slip from rest must slip the way its acceleration goes:
         // a solution that slows it down (s ẇ_t < 0 beyond rounding) is no start of a slip —
         // its slip would stop at once, and the selection would take it again (the 8-link
         // chain stalled so at t = 5.0309 s). Forced slips of moving points are not checked.
         let scale_w = sel.free.iter().fold(0.0, |m: Real, b| m.max(b.abs()));
-        let starts: Vec<(usize, Real)> = (0..resting.len())
-            .filter_map(|i| Some((i, slips[i]?)))
-            .filter(|&(i, _)| sel.points[i].v_t.abs() <= v_slip)
-            .collect();
+        let starts = &mut g.starts;
+        starts.clear();
+        starts.extend(
+            (0..resting.len())
+                .filter_map(|i| Some((i, slips[i]?)))
+                .filter(|&(i, _)| sel.points[i].v_t.abs() <= v_slip),
+        );
         if !starts.is_empty() {
             let consistent = |so: &lcp::Solution| {
                 starts.iter().all(|&(i, s)| match so.modes[i] {
@@ -1073,19 +1256,19 @@ impl Simulation<'_> {
             0 => {
                 return match (0..resting.len()).find(|&i| sliding_painleve(i)) {
                     Some(i) => {
-                        let name = pair_name(self.model, resting[i].pair);
+                        let text = &mut self.scratch.text;
+                        text.clear();
+                        text.push_str("Painlevé's paradox on ");
+                        write_pair_name(text, self.model, resting[i].pair);
+                        let _ = write!(
+                            text,
+                            " at t = {t} s: sliding is inconsistent (Painlevé coefficient \
+                             {:.4e} ≤ 0, no non-negative normal force holds the contact); \
+                             resolved by an impact without collision",
+                            sel.painleve[i]
+                        );
                         observer
-                            .message(
-                                t,
-                                Level::Warning,
-                                &format!(
-                                    "Painlevé's paradox on {name} at t = {t} s: sliding is \
-                                     inconsistent (Painlevé coefficient {:.4e} ≤ 0, no \
-                                     non-negative normal force holds the contact); resolved by \
-                                     an impact without collision",
-                                    sel.painleve[i]
-                                ),
-                            )
+                            .message(t, Level::Warning, text)
                             .map_err(|e| e.at(t))?;
                         Ok(Selected::Painleve(resting[i]))
                     }
@@ -1100,7 +1283,7 @@ impl Simulation<'_> {
                 // The least constraint: the most open points. A choice undone at once (the
                 // next event at the same instant asks again) gives way to the next one in
                 // that order, so the selection cannot chatter between the same sets.
-                let ranked = most_open(&sel.solutions);
+                most_open(&sel.solutions, &mut g.ranked);
                 let (t_prev, undone) = self.indeterminate;
                 let undone = if t - t_prev <= 1e-9 * (1.0 + t.abs()) {
                     undone + 1
@@ -1109,30 +1292,39 @@ impl Simulation<'_> {
                 };
                 self.indeterminate = (t, undone);
                 // One pass through the alternatives; then the first again.
-                let pick = if undone < ranked.len() { undone } else { 0 };
-                let chosen = ranked[pick];
-                let painleve: Vec<String> = (0..resting.len())
-                    .filter(|&i| sliding_painleve(i))
-                    .map(|i| pair_name(self.model, resting[i].pair))
-                    .collect();
-                let what = if painleve.is_empty() {
-                    "the contact modes are not unique".to_owned()
+                let pick = if undone < g.ranked.len() { undone } else { 0 };
+                let chosen = &sel.solutions[g.ranked[pick]];
+                let text = &mut self.scratch.text;
+                text.clear();
+                let mut painleve = (0..resting.len()).filter(|&i| sliding_painleve(i));
+                match painleve.next() {
+                    None => text.push_str("the contact modes are not unique"),
+                    Some(first) => {
+                        text.push_str("Painlevé's paradox on ");
+                        write_pair_name(text, self.model, resting[first].pair);
+                        for i in painleve {
+                            text.push_str(", ");
+                            write_pair_name(text, self.model, resting[i].pair);
+                        }
+                        text.push_str(": the contact modes are indeterminate");
+                    }
+                }
+                let _ = if pick == 0 {
+                    write!(
+                        text,
+                        " at t = {t} s ({count} consistent sets); chose the one with the most \
+                         open contacts"
+                    )
                 } else {
-                    format!(
-                        "Painlevé's paradox on {}: the contact modes are indeterminate",
-                        painleve.join(", ")
+                    write!(
+                        text,
+                        " at t = {t} s ({count} consistent sets); the last choice was undone \
+                         at once: chose the next one by open contacts (#{})",
+                        pick + 1
                     )
                 };
                 observer
-                    .message(
-                        t,
-                        Level::Warning,
-                        &if pick == 0 {
-                            format!("{what} at t = {t} s ({count} consistent sets); chose the one with the most open contacts")
-                        } else {
-                            format!("{what} at t = {t} s ({count} consistent sets); the last choice was undone at once: chose the next one by open contacts (#{})", pick + 1)
-                        },
-                    )
+                    .message(t, Level::Warning, text)
                     .map_err(|e| e.at(t))?;
                 chosen
             }
@@ -1141,42 +1333,43 @@ impl Simulation<'_> {
         let chosen = opened.as_ref().unwrap_or(chosen);
         let previous = self.gaps.persistent.closed();
         let near = 1e-6 * self.scales.length;
-        let closed = (resting.iter().zip(&chosen.modes).zip(&sel.points))
-            .enumerate()
-            .filter_map(|(i, ((p, m), point))| {
-                let hold = match *m {
-                    Mode::Open => return None,
-                    Mode::Stick => Hold::Stick,
-                    Mode::Slide(s) => Hold::Slide(s),
-                };
-                // A point that slid the same way keeps its margin; one that starts to
-                // slide from rest gets one — also one that slid the same way but whose
-                // slip has stopped (its slip-stop event brought it here): without a margin
-                // its event is at once again (the 32-link chain with μ = 0.1, e = 0.6 at
-                // 2.5315 s: a second point of link25/link27 sliding at v_t = 1.4e-17 m/s
-                // with margin 0, its slip-stop event 1,000 times).
-                let before = (previous.iter())
-                    .find(|c| c.pair == p.pair && (c.local - p.local).length() <= near)
-                    .filter(|c| c.hold == hold);
-                let fresh = |s: Real| (-s * point.v_t).max(0.0) + SLIP_MARGIN * v_slip;
-                let slip_margin = match (hold, before) {
-                    (Hold::Slide(s), Some(c)) if s * point.v_t + c.slip_margin <= 0.0 => {
-                        c.slip_margin.max(fresh(s))
-                    }
-                    (_, Some(c)) => c.slip_margin,
-                    (Hold::Slide(s), None) if point.v_t.abs() <= v_slip => fresh(s),
-                    _ => 0.0,
-                };
-                Some(Closed {
-                    pair: p.pair,
-                    local: p.local,
-                    hold,
-                    slip_margin,
-                    reference: (chosen.x[2 * i], chosen.x[2 * i + 1]),
-                })
-            })
-            .collect();
-        Ok(Selected::Set(closed))
+        closed.extend(
+            (resting.iter().zip(&chosen.modes).zip(&sel.points))
+                .enumerate()
+                .filter_map(|(i, ((p, m), point))| {
+                    let hold = match *m {
+                        Mode::Open => return None,
+                        Mode::Stick => Hold::Stick,
+                        Mode::Slide(s) => Hold::Slide(s),
+                    };
+                    // A point that slid the same way keeps its margin; one that starts to
+                    // slide from rest gets one — also one that slid the same way but whose
+                    // slip has stopped (its slip-stop event brought it here): without a
+                    // margin its event is at once again (the 32-link chain with μ = 0.1,
+                    // e = 0.6 at 2.5315 s: a second point of link25/link27 sliding at
+                    // v_t = 1.4e-17 m/s with margin 0, its slip-stop event 1,000 times).
+                    let before = (previous.iter())
+                        .find(|c| c.pair == p.pair && (c.local - p.local).length() <= near)
+                        .filter(|c| c.hold == hold);
+                    let fresh = |s: Real| (-s * point.v_t).max(0.0) + SLIP_MARGIN * v_slip;
+                    let slip_margin = match (hold, before) {
+                        (Hold::Slide(s), Some(c)) if s * point.v_t + c.slip_margin <= 0.0 => {
+                            c.slip_margin.max(fresh(s))
+                        }
+                        (_, Some(c)) => c.slip_margin,
+                        (Hold::Slide(s), None) if point.v_t.abs() <= v_slip => fresh(s),
+                        _ => 0.0,
+                    };
+                    Some(Closed {
+                        pair: p.pair,
+                        local: p.local,
+                        hold,
+                        slip_margin,
+                        reference: (chosen.x[2 * i], chosen.x[2 * i + 1]),
+                    })
+                }),
+        );
+        Ok(Selected::Set)
     }
 
     /// **Lift-offs stay through the instant**: the selection's modes with the points that
@@ -1232,7 +1425,7 @@ impl Simulation<'_> {
     fn set_closed(
         &mut self,
         t: Real,
-        closed: Vec<Closed>,
+        closed: &[Closed],
         observer: &mut dyn Observer,
     ) -> Result<bool, SimError> {
         let same = closed.len() == self.gaps.persistent.closed().len()
@@ -1244,70 +1437,82 @@ impl Simulation<'_> {
                         && a.hold == b.hold
                         && (a.local - b.local).length() <= 1e-6 * self.scales.length
                 });
+        // `Persistent::set` takes its lists by value.
         let mu: Vec<Real> = closed.iter().map(|c| self.material(c.pair).mu).collect();
-        self.system.persistent.set(closed.clone(), mu.clone());
-        self.gaps.set_closed(closed, mu);
+        self.system.persistent.set(closed.to_vec(), mu.clone());
+        self.gaps.set_closed(closed.to_vec(), mu);
         // The pairs whose mode may change: closed now, not free before, pending or
         // accumulating (every other pair stays free).
-        let mut pairs: Vec<PairId> = (self.gaps.persistent.closed().iter())
-            .map(|c| c.pair)
-            .chain(self.modes.changed())
-            .chain(self.passages.iter().map(|p| p.pair))
-            .chain(self.accumulating.stored())
-            .collect();
+        let mut pairs = std::mem::take(&mut self.scratch.pairs);
+        pairs.clear();
+        pairs.extend(
+            (self.gaps.persistent.closed().iter())
+                .map(|c| c.pair)
+                .chain(self.modes.changed())
+                .chain(self.passages.iter().map(|p| p.pair))
+                .chain(self.accumulating.stored()),
+        );
         pairs.sort_unstable();
         pairs.dedup();
-        for pair in pairs {
-            let k = pair.index();
-            let holds = self
-                .gaps
-                .persistent
-                .closed()
-                .iter()
-                .filter(|c| c.pair == pair)
-                .map(|c| c.hold);
-            let mut mode = PairMode::Free;
-            let mut slip = 0i8;
-            for h in holds {
-                mode = match (mode, h) {
-                    (PairMode::Sliding, _) | (_, Hold::Slide(_)) => PairMode::Sliding,
-                    _ => PairMode::Sticking,
-                };
-                if let (Hold::Slide(s), 0) = (h, slip) {
-                    slip = if s > 0.0 { 1 } else { -1 };
-                }
-            }
-            let (current, current_slip) = self.current_mode(pair);
-            if let Some(acc) = self.accumulating[k].take() {
-                // The end of an accumulation: the passage to the mode it enters is
-                // reported at t∞, when the hops it replaced would have ended.
-                self.flush_passages_of(pair, t, observer)?;
-                let note = format!("{}; {} → {}", acc.note, current.name(), mode.name());
-                self.passages.push(Passage {
-                    t: acc.t_inf.unwrap_or(t).max(t),
-                    pair,
-                    from: current,
-                    to: mode,
-                    slip,
-                    note,
-                    t_accumulation: acc.t_inf,
-                });
-            } else if mode != current || (mode == PairMode::Sliding && slip != current_slip) {
-                self.flush_passages_of(pair, t, observer)?;
-                let note = if mode == current {
-                    format!(
-                        "the slip stops and reverses (along {} t)",
-                        if slip > 0 { "+" } else { "−" }
-                    )
-                } else {
-                    format!("{} → {}", current.name(), mode.name())
-                };
-                self.modes[k] = mode;
-                self.slips[k] = slip;
-                self.report(t, pair, (current, mode), note, None, observer)?;
+        let result = pairs
+            .iter()
+            .try_for_each(|&pair| self.report_mode(t, pair, observer));
+        self.scratch.pairs = pairs;
+        result.map(|()| !same)
+    }
+
+    /// After a new closed set: reports the change of mode of `pair` at `t`, if it changed,
+    /// or makes it pending until `t∞` at the end of an accumulation.
+    fn report_mode(
+        &mut self,
+        t: Real,
+        pair: PairId,
+        observer: &mut dyn Observer,
+    ) -> Result<(), SimError> {
+        let k = pair.index();
+        let holds = self
+            .gaps
+            .persistent
+            .closed()
+            .iter()
+            .filter(|c| c.pair == pair)
+            .map(|c| c.hold);
+        let mut mode = PairMode::Free;
+        let mut slip = 0i8;
+        for h in holds {
+            mode = match (mode, h) {
+                (PairMode::Sliding, _) | (_, Hold::Slide(_)) => PairMode::Sliding,
+                _ => PairMode::Sticking,
+            };
+            if let (Hold::Slide(s), 0) = (h, slip) {
+                slip = if s > 0.0 { 1 } else { -1 };
             }
         }
-        Ok(!same)
+        let (current, current_slip) = self.current_mode(pair);
+        if let Some(acc) = self.accumulating[k].take() {
+            // The end of an accumulation: the passage to the mode it enters is
+            // reported at t∞, when the hops it replaced would have ended.
+            self.flush_passages_of(pair, t, observer)?;
+            self.passages.push(Passage {
+                t: acc.t_inf.unwrap_or(t).max(t),
+                pair,
+                from: current,
+                to: mode,
+                slip,
+                accumulation: acc,
+            });
+        } else if mode != current || (mode == PairMode::Sliding && slip != current_slip) {
+            self.flush_passages_of(pair, t, observer)?;
+            let note = if mode == current {
+                Note::Reverses(slip)
+            } else {
+                Note::Change
+            };
+            self.modes[k] = mode;
+            self.slips[k] = slip;
+            self.report(t, pair, (current, mode), note, observer)?;
+        }
+        Ok(())
     }
 
     /// The mode and slip direction of `pair` after its pending passage, if any.
@@ -1355,53 +1560,64 @@ impl Simulation<'_> {
     fn emit_passage(&mut self, p: Passage, observer: &mut dyn Observer) -> Result<(), SimError> {
         self.modes[p.pair.index()] = p.to;
         self.slips[p.pair.index()] = p.slip;
-        self.report(
-            p.t,
-            p.pair,
-            (p.from, p.to),
-            p.note,
-            p.t_accumulation,
-            observer,
-        )
+        let note = Note::Passage(p.accumulation);
+        self.report(p.t, p.pair, (p.from, p.to), note, observer)
     }
 
-    /// Reports a change of mode of `pair` on the log and to the observer.
+    /// Reports a change of mode of `pair` on the log and to the observer: the kept
+    /// [`Transition`] and message text rewritten.
     fn report(
         &mut self,
         t: Real,
         pair: PairId,
         (from, to): (PairMode, PairMode),
-        note: String,
-        t_accumulation: Option<Real>,
+        note: Note,
         observer: &mut dyn Observer,
     ) -> Result<(), SimError> {
-        let name = pair_name(self.model, pair);
-        observer
-            .message(t, Level::Info, &format!("{name}: {note}"))
-            .map_err(|e| e.at(t))?;
-        let transition = Transition {
+        let t_accumulation = match note {
+            Note::Passage(acc) => acc.t_inf,
+            _ => None,
+        };
+        let transition = (self.scratch.transition).get_or_insert_with(|| Transition {
             t,
             pair,
-            name,
+            name: String::new(),
             from,
             to,
-            note,
+            note: String::new(),
             t_accumulation,
-        };
+        });
+        transition.t = t;
+        transition.pair = pair;
+        transition.from = from;
+        transition.to = to;
+        transition.t_accumulation = t_accumulation;
+        transition.name.clear();
+        write_pair_name(&mut transition.name, self.model, pair);
+        transition.note.clear();
+        note.write(&mut transition.note, (from, to));
+        let text = &mut self.scratch.text;
+        text.clear();
+        let _ = write!(text, "{}: {}", transition.name, transition.note);
         observer
-            .transition(self.model, &transition)
+            .message(t, Level::Info, text)
+            .map_err(|e| e.at(t))?;
+        observer
+            .transition(self.model, transition)
             .map_err(|e| e.at(t))
     }
 
     /// Painlevé's inconsistency at a sliding point: an impact without collision, the
     /// one-point law with the approach speed floored at `v_tiny / 2` (its grazing limit).
     /// The floor leaves the point separating at `(1 + e) v_tiny / 2 ≤ v_tiny` at most:
-    /// not separating, to the resolution of the contact stage.
+    /// not separating, to the resolution of the contact stage. `events`: a buffer for the
+    /// ledger.
     fn impact_without_collision(
         &mut self,
         point: Touch,
         t: Real,
         y: &mut [Real],
+        events: &mut Vec<ImpactEvent>,
         observer: &mut dyn Observer,
     ) -> Result<(), SimError> {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
@@ -1417,17 +1633,35 @@ impl Simulation<'_> {
             q,
             u,
         )?;
-        self.ledger(t, ev.into_iter().collect(), observer)?;
+        events.clear();
+        events.extend(ev);
+        self.ledger(t, events, observer)?;
         Ok(())
     }
 }
 
-/// The consistent sets of modes ranked by the least constraint: the most open points
-/// first, in the enumeration's order among equals (the rule of the mode selection).
-fn most_open(solutions: &[lcp::Solution]) -> Vec<&lcp::Solution> {
-    let mut ranked: Vec<&lcp::Solution> = solutions.iter().collect();
-    ranked.sort_by_key(|s| std::cmp::Reverse(s.modes.iter().filter(|m| **m == Mode::Open).count()));
-    ranked
+/// The consistent sets of modes ranked by the least constraint, into `ranked` (indices of
+/// `solutions`): the most open points first, in the enumeration's order among equals (the
+/// rule of the mode selection).
+fn most_open(solutions: &[lcp::Solution], ranked: &mut Vec<usize>) {
+    let open = |s: &lcp::Solution| s.modes.iter().filter(|m| **m == Mode::Open).count();
+    ranked.clear();
+    ranked.extend(0..solutions.len());
+    // The index breaks the ties: the order of a stable sort, without its buffer.
+    ranked.sort_unstable_by_key(|&i| (std::cmp::Reverse(open(&solutions[i])), i));
+}
+
+/// The first of [`most_open`]'s ranking: the first solution with the most open points.
+fn most_open_first(solutions: &[lcp::Solution]) -> Option<&lcp::Solution> {
+    let open = |s: &lcp::Solution| s.modes.iter().filter(|m| **m == Mode::Open).count();
+    let mut best: Option<(&lcp::Solution, usize)> = None;
+    for s in solutions {
+        let k = open(s);
+        if best.is_none_or(|(_, b)| k > b) {
+            best = Some((s, k));
+        }
+    }
+    best.map(|b| b.0)
 }
 
 /// The impacts of one group of coupled contact points at the current instant.
@@ -1443,18 +1677,22 @@ struct GroupImpacts {
 }
 
 /// An accumulation of impacts that ended on a pair at the current instant: what the
-/// mode selection that follows reports.
-#[derive(Clone, Debug)]
+/// mode selection that follows reports (the note is written then, see [`Note`]).
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Accumulation {
     /// When the hops would have ended, if it could be extrapolated (s).
     pub t_inf: Option<Real>,
-    /// What happened, in words.
-    pub note: String,
+    /// The instant of the impact that ended it (s).
+    pub t: Real,
+    /// The separation speed of the hop after that impact, too slow (m/s).
+    pub v: Real,
+    /// The ratio of the last two separation speeds, if `t_inf` was extrapolated.
+    pub ratio: Option<Real>,
 }
 
 /// A change of mode reported later than it is made: the passage to persistent contact at
 /// the end of an accumulation, stamped at `t∞`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Passage {
     /// When it is reported (s).
     pub t: Real,
@@ -1463,15 +1701,185 @@ pub(super) struct Passage {
     pub to: PairMode,
     /// The slip direction it enters (see [`super::Sample::slips`]).
     pub slip: i8,
-    pub note: String,
-    /// When the hops would have ended (s).
-    pub t_accumulation: Option<Real>,
+    /// The accumulation it ends (its `t_inf`: when the hops would have ended).
+    pub accumulation: Accumulation,
+}
+
+/// What a change of mode says in words (see `report`).
+#[derive(Clone, Copy, Debug)]
+enum Note {
+    /// `from → to`.
+    Change,
+    /// The slip stops and reverses, to the direction `s` (`+1` or `−1`) along `t`.
+    Reverses(i8),
+    /// The end of an accumulation of impacts, then `from → to`.
+    Passage(Accumulation),
+}
+
+impl Note {
+    /// Writes the note of a change `from → to` into `out`.
+    fn write(self, out: &mut String, (from, to): (PairMode, PairMode)) {
+        let _ = match self {
+            Note::Change => write!(out, "{} → {}", from.name(), to.name()),
+            Note::Reverses(slip) => write!(
+                out,
+                "the slip stops and reverses (along {} t)",
+                if slip > 0 { "+" } else { "−" }
+            ),
+            Note::Passage(Accumulation { t, v, t_inf, ratio }) => {
+                let _ = write!(
+                    out,
+                    "accumulation of impacts: the hop after the impact at t = {t} s ({v:.3e} \
+                     m/s) is below the resting speed; the impact is made plastic (e = 0, with \
+                     its friction) and the contact stays closed; "
+                );
+                // Without a previous hop to extrapolate from, t∞ is unknown: say so rather
+                // than print NaN, and stamp the passage at t.
+                let _ = match t_inf.zip(ratio) {
+                    Some((t_inf, r)) => write!(
+                        out,
+                        "the hops would end at t∞ = {t_inf} s (extrapolated, ratio {r:.4})"
+                    ),
+                    None => write!(
+                        out,
+                        "the end of the hops is unknown (no earlier hop to extrapolate from)"
+                    ),
+                };
+                write!(out, "; {} → {}", from.name(), to.name())
+            }
+        };
+    }
 }
 
 /// What the mode selection found.
 enum Selected {
-    /// The new closed set.
-    Set(Vec<Closed>),
+    /// The new closed set (in the buffer given to the selection).
+    Set,
     /// Painlevé's inconsistency at this sliding point.
     Painleve(Touch),
+}
+
+/// The kept buffers of the contact stage (scratch, like `Data`: nothing in them lasts from
+/// one use to the next). Refilled at each event, they allocate nothing once they have
+/// grown to the largest event of the run. Each is taken out (`std::mem::take`) by the
+/// function that fills it and put back after; nested calls use others.
+#[derive(Default)]
+pub(super) struct Scratch {
+    /// Of the rounds of `contacts_at`.
+    rounds: Rounds,
+    /// Of `group_impacts`.
+    group: GroupScratch,
+    /// Of `rocking_end`.
+    rocking: RockingScratch,
+    /// Of `select_modes`.
+    select: SelectScratch,
+    /// Of `select_group`.
+    select_group: GroupSelectScratch,
+    /// The touching points of every group, and their groups (`touching_in`).
+    all: Vec<Touch>,
+    all_groups: Vec<usize>,
+    /// The pairs near contact (`touching`).
+    near: Vec<PairId>,
+    /// parry's contact manifolds (`touching`).
+    manifolds: ManifoldWorkspace,
+    /// The points of an impact law, with their materials (`impact_round`).
+    points: Vec<(PairId, PairContact, Material)>,
+    /// The candidate points of a mode selection (`select_at`'s callers).
+    candidates: Vec<Candidate>,
+    /// The pairs whose accumulations end, with the fastest separation of each (m/s).
+    accumulations: Vec<(PairId, Real)>,
+    /// The pairs whose mode may change (`set_closed`).
+    pairs: Vec<PairId>,
+    /// The text of a message to the observer.
+    pub(super) text: String,
+    /// The change of mode reported to the observer (`report`; made at the first).
+    transition: Option<Transition>,
+}
+
+/// The buffers of the rounds of `contacts_at`.
+#[derive(Default)]
+struct Rounds {
+    /// The touching points of the round.
+    touching: Vec<Touch>,
+    /// The group of each touching point (see `coupling`).
+    group: Vec<usize>,
+    /// The groups with an approaching point.
+    ids: Vec<usize>,
+    /// The touching points of one group; then the hops that start.
+    members: Vec<Touch>,
+    /// The impacts so far at this instant, group by group.
+    groups: Vec<GroupImpacts>,
+    /// The ledger entries of the round.
+    events: Vec<ImpactEvent>,
+    /// The touching points that do not separate.
+    resting: Vec<Touch>,
+    /// The closed set the mode selection found.
+    closed: Vec<Closed>,
+}
+
+/// The buffers of `group_impacts`.
+#[derive(Default)]
+struct GroupScratch {
+    /// The approaching points of the group.
+    approaching: Vec<Touch>,
+    /// `u` before the impacts.
+    u_before: Vec<Real>,
+    /// The group's touching points after an impact.
+    after: Vec<Touch>,
+    /// Those that separate too slowly.
+    slow: Vec<Touch>,
+    /// The points a rocking end holds.
+    held: Vec<Touch>,
+}
+
+/// The buffers of `rocking_end`.
+#[derive(Default)]
+struct RockingScratch {
+    /// `u` just after the plastic impact.
+    u_plastic: Vec<Real>,
+    /// The points released from the jump.
+    released: Vec<Touch>,
+    /// The slip each held point is made to take.
+    slides: Vec<Option<Real>>,
+    /// The held points with their materials.
+    points: Vec<(PairId, PairContact, Material)>,
+    /// The held point of each entry.
+    of_entry: Vec<Option<usize>>,
+    /// The held points whose entries pull.
+    pulled: Vec<usize>,
+    /// The released points the jump made approach.
+    approaching: Vec<usize>,
+    /// The touching points after the jump.
+    now: Vec<Touch>,
+    /// The stopped points whose entries are outside the cone, with the slip they take.
+    outside: Vec<(usize, Real)>,
+    /// `u` of the round closest to the conditions, and its entries.
+    best_u: Vec<Real>,
+    best: Vec<ImpactEvent>,
+}
+
+/// The buffers of `select_modes`.
+#[derive(Default)]
+struct SelectScratch {
+    /// The group of each resting point, and the groups.
+    group: Vec<usize>,
+    ids: Vec<usize>,
+    /// The resting points of one group: their indices, themselves.
+    index: Vec<usize>,
+    members: Vec<Touch>,
+    /// The closed set of one group.
+    set: Vec<Closed>,
+    /// The closed points of every group with their resting points and order.
+    sorted: Vec<(usize, usize, Closed)>,
+}
+
+/// The buffers of `select_group`.
+#[derive(Default)]
+struct GroupSelectScratch {
+    /// The slip each resting point must take, if it starts to slip.
+    slips: Vec<Option<Real>>,
+    /// The points that start to slip from rest, with their slips.
+    starts: Vec<(usize, Real)>,
+    /// The consistent sets ranked (see [`most_open`]).
+    ranked: Vec<usize>,
 }

@@ -16,14 +16,24 @@
 //! Seven balls landing on a floor at one instant are seven groups of one point each, so
 //! each gets the paper's one-point law, exactly as if it fell alone.
 
-use std::collections::HashMap;
-
 use crate::model::{BodyId, Model, PairId};
 
-/// The coupling root of every body (see the module doc).
+/// The coupling root of every body (see the module doc), and the scratch of
+/// [`Coupling::groups`].
 #[derive(Clone, Debug)]
 pub struct Coupling {
     root: Vec<Option<usize>>,
+    /// The union–find slot of each root body (indexed by body, `usize::MAX`: none), for
+    /// the roots of the current call; reset after each call through `used`.
+    slot: Vec<usize>,
+    /// The root bodies given a slot by the current call.
+    used: Vec<usize>,
+    /// The parent of each slot (a slot is its own parent at the top of its tree).
+    parent: Vec<usize>,
+    /// The root body of each slot.
+    name: Vec<usize>,
+    /// The coupling roots of each point of the current call.
+    points: Vec<[Option<usize>; 2]>,
 }
 
 impl Coupling {
@@ -33,7 +43,7 @@ impl Coupling {
             let j = &model.joints()[b.index()];
             j.drive.is_none() && j.kind.ndof() > 0
         };
-        let root = (model.body_ids())
+        let root: Vec<Option<usize>> = (model.body_ids())
             .map(|b| {
                 std::iter::once(b)
                     .chain(model.ancestors(b))
@@ -42,7 +52,14 @@ impl Coupling {
                     .map(BodyId::index)
             })
             .collect();
-        Self { root }
+        Self {
+            slot: vec![usize::MAX; root.len()],
+            root,
+            used: Vec::new(),
+            parent: Vec::new(),
+            name: Vec::new(),
+            points: Vec::new(),
+        }
     }
 
     /// The coupling roots of the two bodies of `pair` (`None` for an obstacle or a body
@@ -58,15 +75,18 @@ impl Coupling {
     }
 
     /// The group of each point of `pairs` (one entry per point, several points may share a
-    /// pair): points in one group are coupled, directly or through other points of the
-    /// list. A group is named by its smallest coupling root (a body index), so the names
-    /// stay the same as long as the same bodies touch; a point of two bodies without a root
-    /// is a group of its own, named `usize::MAX − i`.
-    pub fn groups(&self, model: &Model, pairs: impl Iterator<Item = PairId>) -> Vec<usize> {
+    /// pair), into `groups`: points in one group are coupled, directly or through other
+    /// points of the list. A group is named by its smallest coupling root (a body index),
+    /// so the names stay the same as long as the same bodies touch; a point of two bodies
+    /// without a root is a group of its own, named `usize::MAX − i`. Works in kept buffers:
+    /// allocates nothing once they have grown to the largest set of points.
+    pub fn groups(
+        &mut self,
+        model: &Model,
+        pairs: impl Iterator<Item = PairId>,
+        groups: &mut Vec<usize>,
+    ) {
         // Union–find over the roots that appear.
-        let mut slot: HashMap<usize, usize> = HashMap::new();
-        let mut parent: Vec<usize> = Vec::new();
-        let mut name: Vec<usize> = Vec::new();
         fn find(parent: &mut [usize], mut i: usize) -> usize {
             while parent[i] != i {
                 parent[i] = parent[parent[i]];
@@ -74,46 +94,61 @@ impl Coupling {
             }
             i
         }
-        let points: Vec<[Option<usize>; 2]> = pairs.map(|p| self.roots(model, p)).collect();
+        let mut points = std::mem::take(&mut self.points);
+        points.clear();
+        points.extend(pairs.map(|p| self.roots(model, p)));
+        self.parent.clear();
+        self.name.clear();
         for roots in &points {
             let mut first: Option<usize> = None;
-            for r in roots.iter().flatten() {
-                let s = *slot.entry(*r).or_insert_with(|| {
-                    parent.push(parent.len());
-                    name.push(*r);
-                    parent.len() - 1
-                });
+            for &r in roots.iter().flatten() {
+                if self.slot[r] == usize::MAX {
+                    self.slot[r] = self.parent.len();
+                    self.used.push(r);
+                    self.parent.push(self.parent.len());
+                    self.name.push(r);
+                }
+                let s = self.slot[r];
                 match first {
                     None => first = Some(s),
                     Some(f) => {
-                        let (a, b) = (find(&mut parent, f), find(&mut parent, s));
+                        let (a, b) = (find(&mut self.parent, f), find(&mut self.parent, s));
                         if a != b {
-                            let (keep, drop) = if name[a] <= name[b] { (a, b) } else { (b, a) };
-                            parent[drop] = keep;
+                            let (keep, drop) = if self.name[a] <= self.name[b] {
+                                (a, b)
+                            } else {
+                                (b, a)
+                            };
+                            self.parent[drop] = keep;
                         }
                     }
                 }
             }
         }
-        (points.iter().enumerate())
-            .map(|(i, roots)| match roots.iter().flatten().next() {
-                Some(r) => {
-                    let s = find(&mut parent, slot[r]);
-                    name[s]
+        groups.clear();
+        groups.extend(points.iter().enumerate().map(
+            |(i, roots)| match roots.iter().flatten().next() {
+                Some(&r) => {
+                    let s = find(&mut self.parent, self.slot[r]);
+                    self.name[s]
                 }
                 None => usize::MAX - i,
-            })
-            .collect()
+            },
+        ));
+        for &r in &self.used {
+            self.slot[r] = usize::MAX;
+        }
+        self.used.clear();
+        self.points = points;
     }
 }
 
-/// The distinct group names of `groups`, in the order they first appear.
-pub fn distinct(groups: impl IntoIterator<Item = usize>) -> Vec<usize> {
-    let mut ids: Vec<usize> = Vec::new();
+/// The distinct group names of `groups`, in the order they first appear, into `ids`.
+pub fn distinct(groups: impl IntoIterator<Item = usize>, ids: &mut Vec<usize>) {
+    ids.clear();
     for g in groups {
         if !ids.contains(&g) {
             ids.push(g);
         }
     }
-    ids
 }

@@ -33,6 +33,7 @@ mod persistent;
 mod summary;
 mod system;
 
+use std::fmt::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub use accumulation::Scales;
@@ -148,6 +149,8 @@ pub struct Simulation<'m> {
     lift_offs: (Real, Vec<(PairId, crate::math::Vec2)>),
     /// Scratch state `y`.
     y: Vec<Real>,
+    /// Scratch of the contact stage (see [`contacts::Scratch`]).
+    scratch: contacts::Scratch,
     /// Scratch gaps.
     gap_values: Vec<Real>,
     /// Index of the next output time `k / rate`.
@@ -156,6 +159,11 @@ pub struct Simulation<'m> {
     counters: RunCounters,
     /// Time of the last sample reported (s).
     last_sample_t: Option<Real>,
+    /// The stepper's largest step as built (s), for each run's start (`cap_for_spin`
+    /// changes it at every step).
+    h_max: Real,
+    /// The stepper's counters at the start of the run (they count since it was built).
+    stepper_counters: crate::integrate::Counters,
 }
 
 impl<'m> Simulation<'m> {
@@ -171,6 +179,7 @@ impl<'m> Simulation<'m> {
         let n = crate::integrate::OdeSystem::dim(&system);
         let all_pairs = broad::all_pairs_if_few(model);
         let mut stepper = AnyStepper::new(n, &settings.integrator)?;
+        let h_max = stepper.h_max();
         // A step below 10 ε t_end cannot bring the run to its end: it is lost in the
         // rounding of any time near t_end. (The floor 10 ε |t| alone is 0 at t = 0, where a
         // run whose steps kept shrinking never failed.)
@@ -218,11 +227,14 @@ impl<'m> Simulation<'m> {
             slip_starts: (Real::NEG_INFINITY, Vec::new()),
             lift_offs: (Real::NEG_INFINITY, Vec::new()),
             y: vec![0.0; n],
+            scratch: Default::default(),
             gap_values: Vec::new(),
             next_output: 0,
             audit: EnergyAudit::default(),
             counters: RunCounters::default(),
             last_sample_t: None,
+            h_max,
+            stepper_counters: Default::default(),
         })
     }
 
@@ -352,6 +364,7 @@ impl<'m> Simulation<'m> {
             });
         }
         let t0 = initial.t;
+        self.reset();
         self.y.fill(0.0);
         self.y[..n].copy_from_slice(initial.q.as_slice());
         self.y[n..nqu].copy_from_slice(initial.u.as_slice());
@@ -379,6 +392,43 @@ impl<'m> Simulation<'m> {
             self.next_output += 1;
         }
         Ok(())
+    }
+
+    /// Forgets what an earlier run left: every run starts as on a new simulation (the
+    /// same results bit for bit, `tests/all/sim_alloc.rs`), with the buffers it kept.
+    fn reset(&mut self) {
+        /// Every stored pair back at `value`, its storage kept.
+        fn reset_pairs<T: Clone>(map: &mut PairMap<T>, value: T) {
+            let pairs: Vec<PairId> = map.stored().collect();
+            for pair in pairs {
+                map[pair.index()] = value.clone();
+            }
+        }
+        if self.stepper.counters() == Default::default() {
+            // A new simulation: nothing to forget.
+            return;
+        }
+        self.system.persistent.set(Vec::new(), Vec::new());
+        self.gaps.set_closed(Vec::new(), Vec::new());
+        self.gaps.candidates.clear();
+        self.gaps.disarmed.clear();
+        self.stepper.set_h_max(self.h_max);
+        reset_pairs(&mut self.disarmed, None);
+        reset_pairs(&mut self.modes, PairMode::Free);
+        reset_pairs(&mut self.slips, 0);
+        reset_pairs(&mut self.last_separation, None);
+        reset_pairs(&mut self.accumulating, None);
+        self.unresolved = (Real::NAN, 0.0);
+        self.passages.clear();
+        self.indeterminate = (Real::NEG_INFINITY, 0);
+        self.slip_starts = (Real::NEG_INFINITY, std::mem::take(&mut self.slip_starts.1));
+        self.slip_starts.1.clear();
+        self.lift_offs = (Real::NEG_INFINITY, std::mem::take(&mut self.lift_offs.1));
+        self.lift_offs.1.clear();
+        self.audit = EnergyAudit::default();
+        self.counters = RunCounters::default();
+        self.last_sample_t = None;
+        self.stepper_counters = self.stepper.counters();
     }
 
     /// Stage `rearm`: a pair whose gap event is disarmed (a spurious or grazing crossing)
@@ -581,18 +631,24 @@ impl<'m> Simulation<'m> {
     }
 
     /// The pairs whose boxes, grown by `margin` (m), overlap at the positions of
-    /// `self.sampler`, in pair order: every pair within `margin` of contact.
+    /// `self.sampler`, in pair order, into `near`: every pair within `margin` of contact.
     /// Without the broad phase, every pair.
-    fn near_pairs(&mut self, t: Real, margin: Real) -> Result<Vec<PairId>, SimError> {
+    fn near_pairs(
+        &mut self,
+        t: Real,
+        margin: Real,
+        near: &mut Vec<PairId>,
+    ) -> Result<(), SimError> {
         if let Some(all) = &self.every_pair {
-            return Ok(all.clone());
+            near.clear();
+            near.extend_from_slice(all);
+            return Ok(());
         }
         let regions = (&mut self.boxes, &mut self.planes);
         broad::grown_boxes(self.model, &self.sampler, regions, |_| margin).map_err(|e| e.at(t))?;
-        let mut near = Vec::new();
         let regions = (&self.boxes[..], &self.planes[..]);
-        (self.finder).overlapping_pairs(self.model, regions, &mut near);
-        Ok(near)
+        (self.finder).overlapping_pairs(self.model, regions, near);
+        Ok(())
     }
 
     /// The step cap before [`Self::cap_for_spin`]: the integrator's, or the shortest cap
@@ -882,7 +938,8 @@ impl<'m> Simulation<'m> {
     fn finish(&mut self, stop: StopReason, observer: &mut dyn Observer) -> RunSummary {
         let (n, nqu) = (self.model.nq(), self.model.nq() + self.model.nu());
         let t = self.stepper.t();
-        let y = self.stepper.y().to_vec();
+        let mut y = std::mem::take(&mut self.y);
+        y.copy_from_slice(self.stepper.y());
         let (q, u) = (&y[..n], &y[n..nqu]);
         self.audit.end = energy(self.model, &mut self.sampler, t, q, u).unwrap_or(Energy {
             kinetic: Real::NAN,
@@ -903,12 +960,16 @@ impl<'m> Simulation<'m> {
         if self.last_sample_t != Some(t) {
             let _ = self.sample(t, &y, false, observer);
         }
-        let _ = observer.message(t, level, &format!("run stopped at t = {t} s: {stop}"));
-        let c = self.stepper.counters();
-        self.counters.steps = c.steps;
-        self.counters.rejected = c.rejected;
-        self.counters.rhs_evals = c.rhs_evals;
-        RunSummary {
+        let mut text = std::mem::take(&mut self.scratch.text);
+        text.clear();
+        let _ = write!(text, "run stopped at t = {t} s: {stop}");
+        let _ = observer.message(t, level, &text);
+        self.scratch.text = text;
+        let (c, c0) = (self.stepper.counters(), self.stepper_counters);
+        self.counters.steps = c.steps - c0.steps;
+        self.counters.rejected = c.rejected - c0.rejected;
+        self.counters.rhs_evals = c.rhs_evals - c0.rhs_evals;
+        let summary = RunSummary {
             stop,
             state: State::new(
                 t,
@@ -917,6 +978,8 @@ impl<'m> Simulation<'m> {
             ),
             audit: self.audit,
             counters: self.counters,
-        }
+        };
+        self.y = y;
+        summary
     }
 }
