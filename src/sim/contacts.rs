@@ -626,10 +626,12 @@ impl Simulation<'_> {
             })
             .collect();
         let sel = self.select_at(t, y, &points, Real::INFINITY)?;
-        Ok((candidates.iter().zip(&sel.free))
+        let slow = (candidates.iter().zip(&sel.free))
             .filter(|(p, a_n)| p.v_n <= self.scales.v_rest_at(**a_n))
             .map(|(p, _)| *p)
-            .collect())
+            .collect();
+        self.system.persistent.recycle_selection(sel);
+        Ok(slow)
     }
 
     /// The end of a rocking accumulation at `t` (`u` in `y` just after the plastic impact
@@ -825,6 +827,7 @@ impl Simulation<'_> {
                 duration,
             });
         }
+        self.system.persistent.recycle_selection(sel);
         Ok(())
     }
 
@@ -901,11 +904,8 @@ impl Simulation<'_> {
 
     /// Puts the closed set back in the ODE system after a selection used its workspace.
     fn restore_persistent(&mut self) {
-        let closed = self.gaps.persistent.closed().to_vec();
-        let mu = (0..closed.len())
-            .map(|i| self.gaps.persistent.mu(i))
-            .collect();
-        self.system.persistent.set(closed, mu);
+        let gaps = &self.gaps.persistent;
+        (self.system.persistent).set_from(gaps.closed(), gaps.mus());
     }
 
     /// The closed point whose friction margin `μ λ_n − |λ_t|` crossed zero at `event`, if
@@ -1176,6 +1176,7 @@ impl Simulation<'_> {
                 })
             })
             .collect();
+        self.system.persistent.recycle_selection(sel);
         Ok(Selected::Set(closed))
     }
 
@@ -1245,7 +1246,7 @@ impl Simulation<'_> {
                         && (a.local - b.local).length() <= 1e-6 * self.scales.length
                 });
         let mu: Vec<Real> = closed.iter().map(|c| self.material(c.pair).mu).collect();
-        self.system.persistent.set(closed.clone(), mu.clone());
+        self.system.persistent.set_from(&closed, &mu);
         self.gaps.set_closed(closed, mu);
         // The pairs whose mode may change: closed now, not free before, pending or
         // accumulating (every other pair stays free).
