@@ -140,18 +140,27 @@ pub(crate) fn amax(v: &[Real]) -> Real {
 
 /// Gives `m` the shape `rows × cols`, keeping its buffer when the shape is already right
 /// (nalgebra's `resize_mut` copies into a new buffer every time); the entries are left as
-/// they are when it is, and zero otherwise.
+/// they are when it is, and zero otherwise. At another shape the buffer is kept too (it is
+/// reallocated only to grow): a workspace that takes turns between a few shapes (the
+/// closed points, then a mode selection's candidates) allocates nothing once it has held
+/// the largest.
 pub(crate) fn fit_matrix(m: &mut DMatrix<Real>, rows: usize, cols: usize) {
     if m.shape() != (rows, cols) {
-        m.resize_mut(rows, cols, 0.0);
+        let mut data: Vec<Real> = std::mem::replace(m, DMatrix::zeros(0, 0)).data.into();
+        data.clear();
+        data.resize(rows * cols, 0.0);
+        *m = DMatrix::from_vec(rows, cols, data);
     }
 }
 
-/// Gives `v` the length `len`, keeping its buffer when it is already right (see
-/// [`fit_matrix`]).
+/// Gives `v` the length `len`, keeping its buffer when it is already right, and its
+/// capacity otherwise, with every entry zero (see [`fit_matrix`]).
 pub(crate) fn fit_vector(v: &mut DVector<Real>, len: usize) {
     if v.len() != len {
-        v.resize_vertically_mut(len, 0.0);
+        let mut data: Vec<Real> = std::mem::replace(v, DVector::zeros(0)).data.into();
+        data.clear();
+        data.resize(len, 0.0);
+        *v = DVector::from_vec(data);
     }
 }
 

@@ -11,64 +11,169 @@ use crate::math::Real;
 
 /// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
 /// `A` is `2n × 2n`, `b` has `2n` entries, `allowed` has `n`. Intended for a few contacts
-/// (it tries up to `4ⁿ` linear systems); returns every consistent combination.
+/// (it tries up to `4ⁿ` linear systems); returns every consistent combination. (A fresh
+/// workspace: [`Enumeration::solve_into`] keeps one.)
 pub fn solve(a: &DMatrix<Real>, b: &DVector<Real>, allowed: &[Allowed]) -> Solutions {
-    let n = allowed.len();
-    debug_assert_eq!(a.nrows(), 2 * n);
-    let options: Vec<Vec<Mode>> = allowed
-        .iter()
-        .map(|c| {
-            let mut m = Vec::with_capacity(4);
-            if c.open {
-                m.push(Mode::Open);
-            }
-            match c.slip {
-                Some(s) => m.push(Mode::Slide(s)),
-                None => m.extend([Mode::Stick, Mode::Slide(1.0), Mode::Slide(-1.0)]),
-            }
-            m
-        })
-        .collect();
-    let scale_x = a.amax().max(Real::MIN_POSITIVE);
-    let scale_w = b.amax();
     let mut all = Vec::new();
-    let mut index = vec![0usize; n];
-    loop {
-        let modes: Vec<Mode> = (0..n).map(|i| options[i][index[i]]).collect();
-        if let Some(sol) = solve_modes(a, b, allowed, &modes, scale_x, scale_w) {
-            push_distinct(&mut all, sol, scale_w);
-        }
-        // Next combination (odometer).
-        let mut i = 0;
-        loop {
-            if i == n {
-                return Solutions { all };
-            }
-            index[i] += 1;
-            if index[i] < options[i].len() {
-                break;
-            }
-            index[i] = 0;
-            i += 1;
-        }
-    }
+    Enumeration::default().solve_into(a, b, allowed, &mut all);
+    Solutions { all }
 }
 
-/// Adds `sol` unless a solution with the same motion `w` is there already: two mode sets
-/// with the same `w` differ only in forces that do not move anything — points at a
-/// boundary (an open point with no force, a closed point with no force), or redundant
-/// points whose forces may be shared in many ways (a rod lying on two points of a floor;
-/// `Jᵀ Δx = 0` since `Δxᵀ A Δx = 0`). Of two such, the one with more open points is kept.
-fn push_distinct(all: &mut Vec<Solution>, sol: Solution, scale_w: Real) {
-    let tol = TOL * scale_w.max(sol.w.amax()).max(Real::MIN_POSITIVE);
-    let open = |s: &Solution| s.modes.iter().filter(|m| **m == Mode::Open).count();
-    match all.iter_mut().find(|s| (&s.w - &sol.w).amax() <= tol) {
-        Some(same) => {
-            if open(&sol) > open(same) {
-                *same = sol;
+/// The workspace of the enumeration ([`solve`]), kept between calls: after the calls of
+/// the largest problem and the most solutions, [`Enumeration::solve_into`] allocates
+/// nothing (the mode selections and the simultaneous impacts of a run call it at every
+/// event).
+#[derive(Clone, Debug, Default)]
+pub struct Enumeration {
+    /// The modes each contact may take, in the enumeration's order (open, stick, slide
+    /// +1, slide −1), and how many.
+    options: Vec<([Mode; 4], usize)>,
+    /// The odometer of the combinations: the option of each contact taken.
+    index: Vec<usize>,
+    /// The combination tried.
+    modes: Vec<Mode>,
+    /// The linear system of the combination, its forces `x` and `w = A x + b`.
+    system: ModeSystem,
+    /// Scratch: the difference of two solutions' `w` (2n).
+    diff: DVector<Real>,
+    /// Solutions of earlier calls whose buffers the next solutions are written into.
+    spare: Vec<Solution>,
+}
+
+impl Enumeration {
+    /// [`solve`] into `out` (its solutions replaced; their buffers are reused): every
+    /// consistent combination of modes, in the enumeration's order, the same numbers.
+    pub fn solve_into(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+        out: &mut Vec<Solution>,
+    ) {
+        self.recycle(out);
+        let n = allowed.len();
+        debug_assert_eq!(a.nrows(), 2 * n);
+        self.options.clear();
+        self.options.extend(allowed.iter().map(|c| {
+            let mut m = [Mode::Open; 4];
+            let mut len = 0;
+            let mut push = |mode: Mode| {
+                m[len] = mode;
+                len += 1;
+            };
+            if c.open {
+                push(Mode::Open);
+            }
+            match c.slip {
+                Some(s) => push(Mode::Slide(s)),
+                None => [Mode::Stick, Mode::Slide(1.0), Mode::Slide(-1.0)]
+                    .into_iter()
+                    .for_each(push),
+            }
+            (m, len)
+        }));
+        let scale_x = a.amax().max(Real::MIN_POSITIVE);
+        let scale_w = b.amax();
+        self.index.clear();
+        self.index.resize(n, 0);
+        loop {
+            self.modes.clear();
+            (self.modes).extend((0..n).map(|i| self.options[i].0[self.index[i]]));
+            if self.solve_modes(a, b, allowed, scale_x, scale_w) {
+                self.push_distinct(out, scale_w);
+            }
+            // Next combination (odometer).
+            let mut i = 0;
+            loop {
+                if i == n {
+                    return;
+                }
+                self.index[i] += 1;
+                if self.index[i] < self.options[i].1 {
+                    break;
+                }
+                self.index[i] = 0;
+                i += 1;
             }
         }
-        None => all.push(sol),
+    }
+
+    /// Empties `out`, its solutions kept as spares to be written into.
+    pub fn recycle(&mut self, out: &mut Vec<Solution>) {
+        self.spare.append(out);
+    }
+
+    /// Whether the combination `self.modes` is consistent: its system solved (into
+    /// `self.system`) and its sign conditions met.
+    fn solve_modes(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+        scale_a: Real,
+        scale_b: Real,
+    ) -> bool {
+        let (modes, sys) = (&self.modes, &mut self.system);
+        if sys
+            .solve(a, b, |i| allowed[i].mu, modes, (scale_a, scale_b), None)
+            .is_none()
+        {
+            return false;
+        }
+        let (x, w) = (&sys.x, &sys.w);
+        let tol_w = TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE);
+        let tol_x = TOL * x.amax().max(Real::MIN_POSITIVE);
+        modes.iter().enumerate().all(|(i, mode)| {
+            let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
+            let mu = allowed[i].mu;
+            match *mode {
+                Mode::Open => wn >= -tol_w,
+                Mode::Stick => xn >= -tol_x && xt.abs() <= mu * xn + tol_x,
+                // A slip that starts needs a tangential tendency in its direction: with
+                // none, the point sticks (and both directions would pass a closed test).
+                Mode::Slide(s) => xn >= -tol_x && (allowed[i].slip.is_some() || s * wt > tol_w),
+            }
+        })
+    }
+
+    /// Adds the solution of `self.modes` and `self.system` to `all` unless a solution
+    /// with the same motion `w` is there already: two mode sets with the same `w` differ
+    /// only in forces that do not move anything — points at a boundary (an open point
+    /// with no force, a closed point with no force), or redundant points whose forces may
+    /// be shared in many ways (a rod lying on two points of a floor; `Jᵀ Δx = 0` since
+    /// `Δxᵀ A Δx = 0`). Of two such, the one with more open points is kept.
+    fn push_distinct(&mut self, all: &mut Vec<Solution>, scale_w: Real) {
+        let (modes, w) = (&self.modes, &self.system.w);
+        let tol = TOL * scale_w.max(w.amax()).max(Real::MIN_POSITIVE);
+        let open = |m: &[Mode]| m.iter().filter(|m| **m == Mode::Open).count();
+        let diff = &mut self.diff;
+        let same = all.iter_mut().find(|s| {
+            // `(&s.w - w).amax()`, in place.
+            fit_vector(diff, w.len());
+            diff.copy_from(&s.w);
+            *diff -= w;
+            diff.amax() <= tol
+        });
+        let to = match same {
+            Some(same) if open(modes) > open(&same.modes) => same,
+            Some(_) => return,
+            None => {
+                all.push(self.spare.pop().unwrap_or_else(|| Solution {
+                    modes: Vec::new(),
+                    x: DVector::zeros(0),
+                    w: DVector::zeros(0),
+                }));
+                let last = all.len() - 1;
+                &mut all[last]
+            }
+        };
+        to.modes.clear();
+        to.modes.extend_from_slice(modes);
+        let (x, w) = (&self.system.x, &self.system.w);
+        fit_vector(&mut to.x, x.len());
+        to.x.copy_from(x);
+        fit_vector(&mut to.w, w.len());
+        to.w.copy_from(w);
     }
 }
 
@@ -137,39 +242,6 @@ fn forces_with(
         (a.amax().max(Real::MIN_POSITIVE), b.amax()),
         reference,
     )?;
-    Some(Solution {
-        modes: modes.to_vec(),
-        x,
-        w,
-    })
-}
-
-/// The solution for one combination of modes, if it is consistent.
-fn solve_modes(
-    a: &DMatrix<Real>,
-    b: &DVector<Real>,
-    allowed: &[Allowed],
-    modes: &[Mode],
-    scale_a: Real,
-    scale_b: Real,
-) -> Option<Solution> {
-    let (x, w) = linear(a, b, allowed, modes, (scale_a, scale_b), None)?;
-    let tol_w = TOL * (scale_b + scale_a * x.amax()).max(Real::MIN_POSITIVE);
-    let tol_x = TOL * x.amax().max(Real::MIN_POSITIVE);
-    for (i, mode) in modes.iter().enumerate() {
-        let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
-        let mu = allowed[i].mu;
-        let ok = match *mode {
-            Mode::Open => wn >= -tol_w,
-            Mode::Stick => xn >= -tol_x && xt.abs() <= mu * xn + tol_x,
-            // A slip that starts needs a tangential tendency in its direction: with none,
-            // the point sticks (and both directions would pass a closed test).
-            Mode::Slide(s) => xn >= -tol_x && (allowed[i].slip.is_some() || s * wt > tol_w),
-        };
-        if !ok {
-            return None;
-        }
-    }
     Some(Solution {
         modes: modes.to_vec(),
         x,

@@ -198,6 +198,8 @@ pub struct Solver {
     pivots: usize,
     /// A covering vector of a retry (k).
     cover: Vec<Real>,
+    /// The enumeration's workspace, for [`super::solutions_into`].
+    pub(super) enumeration: super::Enumeration,
 }
 
 impl Solver {

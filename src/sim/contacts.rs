@@ -745,6 +745,7 @@ impl Simulation<'_> {
             free.next()
                 .is_some_and(|a_n| p.v_n <= self.scales.v_rest_at(*a_n))
         });
+        self.system.persistent.recycle_selection(sel);
         Ok(())
     }
 
@@ -962,6 +963,7 @@ impl Simulation<'_> {
                 duration,
             });
         }
+        self.system.persistent.recycle_selection(sel);
         Ok(())
     }
 
@@ -1027,11 +1029,8 @@ impl Simulation<'_> {
 
     /// Puts the closed set back in the ODE system after a selection used its workspace.
     fn restore_persistent(&mut self) {
-        let closed = self.gaps.persistent.closed().to_vec();
-        let mu = (0..closed.len())
-            .map(|i| self.gaps.persistent.mu(i))
-            .collect();
-        self.system.persistent.set(closed, mu);
+        let gaps = &self.gaps.persistent;
+        (self.system.persistent).set_from(gaps.closed(), gaps.mus());
     }
 
     /// The closed point whose friction margin `μ λ_n − |λ_t|` crossed zero at `event`, if
@@ -1369,6 +1368,7 @@ impl Simulation<'_> {
                     })
                 }),
         );
+        self.system.persistent.recycle_selection(sel);
         Ok(Selected::Set)
     }
 
@@ -1437,10 +1437,12 @@ impl Simulation<'_> {
                         && a.hold == b.hold
                         && (a.local - b.local).length() <= 1e-6 * self.scales.length
                 });
-        // `Persistent::set` takes its lists by value.
-        let mu: Vec<Real> = closed.iter().map(|c| self.material(c.pair).mu).collect();
-        self.system.persistent.set(closed.to_vec(), mu.clone());
-        self.gaps.set_closed(closed.to_vec(), mu);
+        let mut mu = std::mem::take(&mut self.scratch.mu);
+        mu.clear();
+        mu.extend(closed.iter().map(|c| self.material(c.pair).mu));
+        self.system.persistent.set_from(closed, &mu);
+        self.gaps.set_closed(closed, &mu);
+        self.scratch.mu = mu;
         // The pairs whose mode may change: closed now, not free before, pending or
         // accumulating (every other pair stays free).
         let mut pairs = std::mem::take(&mut self.scratch.pairs);
@@ -1790,6 +1792,8 @@ pub(super) struct Scratch {
     accumulations: Vec<(PairId, Real)>,
     /// The pairs whose mode may change (`set_closed`).
     pairs: Vec<PairId>,
+    /// The coefficients of friction of a new closed set (`set_closed`).
+    mu: Vec<Real>,
     /// The text of a message to the observer.
     pub(super) text: String,
     /// The change of mode reported to the observer (`report`; made at the first).

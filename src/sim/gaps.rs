@@ -411,11 +411,11 @@ impl<'m> GapFunctions<'m> {
     }
 
     /// Replaces the closed points (`mu` from their pairs, after overrides), with room for
-    /// their evaluations (`Persistent::set`).
-    pub fn set_closed(&mut self, closed: Vec<super::Closed>, mu: Vec<Real>) {
+    /// their evaluations (`Persistent::set_from`: copied into kept buffers).
+    pub fn set_closed(&mut self, closed: &[super::Closed], mu: &[Real]) {
         let k = closed.len();
         (self.here.closed).reserve(k.saturating_sub(self.here.closed.len()));
-        self.persistent.set(closed, mu);
+        self.persistent.set_from(closed, mu);
         self.stand_ins.nothing.clear();
         self.end.fit(k, self.model.nq() + self.model.nu());
     }

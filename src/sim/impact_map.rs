@@ -13,7 +13,7 @@ use crate::impact::{
 };
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
-use crate::linalg::MinNorm;
+use crate::linalg::{MinNorm, fit_matrix, fit_vector};
 use crate::math::Real;
 use crate::model::{Material, Model, PairId};
 use crate::state::Data;
@@ -200,6 +200,8 @@ pub struct ImpactMap {
     x_t: Vec<Real>,
     /// The complementarity solver of simultaneous impacts.
     lcp: lcp::Solver,
+    /// The scratch of the impacts of several points.
+    many: Many,
 }
 
 impl ImpactMap {
@@ -215,6 +217,7 @@ impl ImpactMap {
             x_n: vec![0.0; nu],
             x_t: vec![0.0; nu],
             lcp: lcp::Solver::new(),
+            many: Many::default(),
         }
     }
 
@@ -468,44 +471,61 @@ impl ImpactMap {
         q: &[Real],
         u: &mut [Real],
     ) -> Result<Vec<ImpactEvent>, SimError> {
+        let mut many = std::mem::take(&mut self.many);
+        let events = self.apply_many_with(&mut many, model, points, t, q, u);
+        self.many = many;
+        events
+    }
+
+    /// [`Self::apply_many`] with the scratch `s` (taken out of `self`).
+    fn apply_many_with(
+        &mut self,
+        s: &mut Many,
+        model: &Model,
+        points: &[(PairId, PairContact, Material)],
+        t: Real,
+        q: &[Real],
+        u: &mut [Real],
+    ) -> Result<Vec<ImpactEvent>, SimError> {
         let k = points.len();
-        let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
+        let at = points.iter().map(|p| (p.0, p.1));
+        self.assemble(&mut s.set, &mut s.column, model, at, t, q, u)?;
+        let set = &s.set;
         // The complementarity problem: w = W P + b with b_n = (1 + e) v_n⁻, b_t = v_t⁻.
-        let mut b = DVector::zeros(2 * k);
-        let mut allowed = Vec::with_capacity(k);
+        fit_vector(&mut s.b, 2 * k);
+        s.allowed.clear();
         for (i, &(_, _, m)) in points.iter().enumerate() {
-            b[2 * i] = (1.0 + m.e) * set.v[2 * i];
-            b[2 * i + 1] = set.v[2 * i + 1];
-            allowed.push(Allowed {
+            s.b[2 * i] = (1.0 + m.e) * set.v[2 * i];
+            s.b[2 * i + 1] = set.v[2 * i + 1];
+            s.allowed.push(Allowed {
                 mu: m.mu,
                 open: true,
                 slip: None,
             });
         }
-        let solutions =
-            lcp::solutions(&mut self.lcp, &set.w, &b, &allowed).map_err(|e| SimError::Contact {
+        lcp::solutions_into(&mut self.lcp, &set.w, &s.b, &s.allowed, &mut s.solutions).map_err(
+            |e| SimError::Contact {
                 t,
                 message: format!(
                     "the simultaneous impact of {k} contact points under the generalized \
                      Newton law: {e}"
                 ),
-            })?;
+            },
+        )?;
         // P_n ≥ 0 exactly: a force the solver left at −rounding is none.
-        let mut sol = solutions
-            .into_iter()
-            .next()
-            .ok_or_else(|| SimError::Contact {
-                t,
-                message: format!("the simultaneous impact of {k} contact points has no solution"),
-            })?;
-        sol.open_negative_normals(&set.w, &b);
-        let sol = &sol;
-        let materials: Vec<Material> = points.iter().map(|p| p.2).collect();
+        let sol = s.solutions.first_mut().ok_or_else(|| SimError::Contact {
+            t,
+            message: format!("the simultaneous impact of {k} contact points has no solution"),
+        })?;
+        sol.open_negative_normals(&set.w, &s.b);
+        let sol = &*sol;
+        s.materials.clear();
+        s.materials.extend(points.iter().map(|p| p.2));
         self.jump(
             model,
             ImpactCause::Simultaneous,
-            &set,
-            &materials,
+            (set, &mut s.jump),
+            &s.materials,
             &sol.x,
             &sol.modes,
             t,
@@ -559,35 +579,57 @@ impl ImpactMap {
         q: &[Real],
         u: &mut [Real],
     ) -> Result<Vec<ImpactEvent>, SimError> {
+        let mut many = std::mem::take(&mut self.many);
+        let events = self.close_with(&mut many, model, points, slides, v_stop, t, q, u);
+        self.many = many;
+        events
+    }
+
+    /// [`Self::close`] with the scratch `s` (taken out of `self`).
+    #[allow(clippy::too_many_arguments)]
+    fn close_with(
+        &mut self,
+        s: &mut Many,
+        model: &Model,
+        points: &[(PairId, PairContact, Material)],
+        slides: &[Option<Real>],
+        v_stop: Real,
+        t: Real,
+        q: &[Real],
+        u: &mut [Real],
+    ) -> Result<Vec<ImpactEvent>, SimError> {
         let k = points.len();
-        let set = self.assemble(model, points.iter().map(|p| (p.0, p.1)), t, q, u)?;
+        let at = points.iter().map(|p| (p.0, p.1));
+        self.assemble(&mut s.set, &mut s.column, model, at, t, q, u)?;
+        let set = &s.set;
         let forced = |i: usize| slides.get(i).copied().flatten();
-        let rows: Vec<usize> = (0..2 * k)
-            .filter(|&r| {
-                let i = r / 2;
-                r.is_multiple_of(2)
-                    || (points[i].2.mu > 0.0 && set.v[r].abs() <= v_stop && forced(i).is_none())
-            })
-            .collect();
-        let m = rows.len();
+        s.rows.clear();
+        s.rows.extend((0..2 * k).filter(|&r| {
+            let i = r / 2;
+            r.is_multiple_of(2)
+                || (points[i].2.mu > 0.0 && set.v[r].abs() <= v_stop && forced(i).is_none())
+        }));
+        let (rows, m) = (&s.rows, s.rows.len());
         // Whether each point stops (its tangential row is an unknown).
-        let mut stops = vec![false; k];
+        s.stops.clear();
+        s.stops.resize(k, false);
         for &r in rows.iter().filter(|r| !r.is_multiple_of(2)) {
-            stops[r / 2] = true;
+            s.stops[r / 2] = true;
         }
+        let stops = &s.stops;
         // The tangential impulse of a point that keeps slipping, per unit of its normal
         // impulse: −μ s, s = sign v_t or the slip `slides` gives (Coulomb's sliding
         // friction); 0 for the rows that are themselves unknowns (a tangential row, or a
         // normal row whose point stops). Once per point, not per entry of `W_rr`.
-        let friction: Vec<Real> = (0..k)
-            .map(|i| {
-                if points[i].2.mu > 0.0 && !stops[i] {
-                    -points[i].2.mu * forced(i).unwrap_or(set.v[2 * i + 1].signum())
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        s.friction.clear();
+        s.friction.extend((0..k).map(|i| {
+            if points[i].2.mu > 0.0 && !stops[i] {
+                -points[i].2.mu * forced(i).unwrap_or(set.v[2 * i + 1].signum())
+            } else {
+                0.0
+            }
+        }));
+        let friction = &s.friction;
         let slide = |r: usize| -> Real {
             if r.is_multiple_of(2) {
                 friction[r / 2]
@@ -595,48 +637,55 @@ impl ImpactMap {
                 0.0
             }
         };
-        let w_rr = DMatrix::from_fn(m, m, |i, j| {
-            let w = set.w[(rows[i], rows[j])];
-            match slide(rows[j]) {
-                0.0 => w,
-                f => w + f * set.w[(rows[i], rows[j] + 1)],
+        fit_matrix(&mut s.w_rr, m, m);
+        for j in 0..m {
+            for i in 0..m {
+                let w = set.w[(rows[i], rows[j])];
+                s.w_rr[(i, j)] = match slide(rows[j]) {
+                    0.0 => w,
+                    f => w + f * set.w[(rows[i], rows[j] + 1)],
+                };
             }
-        });
-        let rhs = DVector::from_fn(m, |i, _| -set.v[rows[i]]);
+        }
+        fit_vector(&mut s.rhs, m);
+        for (i, r) in s.rhs.iter_mut().enumerate() {
+            *r = -set.v[rows[i]];
+        }
         // The minimum-norm solution: W_rr is singular where closing points are redundant.
-        let mut p_r = DVector::zeros(m);
-        MinNorm::new().solve(&w_rr, &rhs, &mut p_r);
-        if !p_r.iter().all(|p| p.is_finite()) {
+        fit_vector(&mut s.p_r, m);
+        s.ls.solve(&s.w_rr, &s.rhs, &mut s.p_r);
+        if !s.p_r.iter().all(|p| p.is_finite()) {
             return Err(SimError::Contact {
                 t,
                 message: "the end of an accumulation of impacts: no finite impulse".to_owned(),
             });
         }
-        let mut x = DVector::zeros(2 * k);
+        fit_vector(&mut s.x, 2 * k);
+        s.x.fill(0.0);
         for (i, &r) in rows.iter().enumerate() {
-            x[r] = p_r[i];
+            s.x[r] = s.p_r[i];
             match slide(r) {
                 0.0 => {}
-                f => x[r + 1] = f * p_r[i],
+                f => s.x[r + 1] = f * s.p_r[i],
             }
         }
-        let materials: Vec<Material> = points.iter().map(|p| Material { e: 0.0, ..p.2 }).collect();
-        let modes: Vec<Mode> = (0..k)
-            .map(|i| {
-                if stops[i] {
-                    Mode::Stick
-                } else {
-                    Mode::Slide(forced(i).unwrap_or(set.v[2 * i + 1].signum()))
-                }
-            })
-            .collect();
+        s.materials.clear();
+        (s.materials).extend(points.iter().map(|p| Material { e: 0.0, ..p.2 }));
+        s.modes.clear();
+        s.modes.extend((0..k).map(|i| {
+            if stops[i] {
+                Mode::Stick
+            } else {
+                Mode::Slide(forced(i).unwrap_or(set.v[2 * i + 1].signum()))
+            }
+        }));
         self.jump(
             model,
             ImpactCause::RockingEnd,
-            &set,
-            &materials,
-            &x,
-            &modes,
+            (set, &mut s.jump),
+            &s.materials,
+            &s.x,
+            &s.modes,
             t,
             q,
             u,
@@ -644,46 +693,48 @@ impl ImpactMap {
     }
 
     /// The frames, rows, `W = J M⁻¹ Jᵀ` and velocities of several contact points at
-    /// `(t, q, u)`.
+    /// `(t, q, u)`, into `set` (`column`: scratch of `nu`).
+    #[allow(clippy::too_many_arguments)]
     fn assemble(
         &mut self,
+        set: &mut PointSet,
+        column: &mut Vec<Real>,
         model: &Model,
         points: impl ExactSizeIterator<Item = (PairId, PairContact)>,
         t: Real,
         q: &[Real],
         u: &[Real],
-    ) -> Result<PointSet, SimError> {
+    ) -> Result<(), SimError> {
         let (k, nu) = (points.len(), model.nu());
-        let mut jac = DMatrix::zeros(2 * k, nu);
-        let mut frames = Vec::with_capacity(k);
-        let mut v = DVector::zeros(2 * k);
+        fit_matrix(&mut set.jac, 2 * k, nu);
+        set.frames.clear();
+        fit_vector(&mut set.v, 2 * k);
         for (i, (pair, contact)) in points.enumerate() {
             let frame = self.frame_at_point(model, (pair, contact), t, q, u)?;
             for r in 0..nu {
-                jac[(2 * i, r)] = self.j_n[r];
-                jac[(2 * i + 1, r)] = self.j_t[r];
+                set.jac[(2 * i, r)] = self.j_n[r];
+                set.jac[(2 * i + 1, r)] = self.j_t[r];
             }
-            v[2 * i] = frame.v_n();
-            v[2 * i + 1] = frame.v_t();
-            frames.push(frame);
+            set.v[2 * i] = frame.v_n();
+            set.v[2 * i + 1] = frame.v_t();
+            set.frames.push(frame);
         }
         factor_mass(model, &mut self.data, t).map_err(|e| SimError::at(t, e))?;
-        let mut minv_jt = DMatrix::zeros(nu, 2 * k);
-        let mut x = vec![0.0; nu];
+        fit_matrix(&mut set.minv_jt, nu, 2 * k);
+        column.clear();
+        column.resize(nu, 0.0);
         for col in 0..2 * k {
-            x.iter_mut()
-                .zip(jac.row(col).iter())
+            column
+                .iter_mut()
+                .zip(set.jac.row(col).iter())
                 .for_each(|(x, j)| *x = *j);
-            solve_mass(&mut self.data, &mut x).map_err(|e| SimError::at(t, e))?;
-            minv_jt.column_mut(col).copy_from_slice(&x);
+            solve_mass(&mut self.data, column).map_err(|e| SimError::at(t, e))?;
+            set.minv_jt.column_mut(col).copy_from_slice(column);
         }
-        let w = &jac * &minv_jt;
-        Ok(PointSet {
-            frames,
-            minv_jt,
-            w,
-            v,
-        })
+        // W = J M⁻¹ Jᵀ (`mul_to` is the product's own `gemm`: the same numbers).
+        fit_matrix(&mut set.w, 2 * k, 2 * k);
+        set.jac.mul_to(&set.minv_jt, &mut set.w);
+        Ok(())
     }
 
     /// Applies the impulses `x` (normal and tangential of each point of `set`) to `u`:
@@ -693,7 +744,7 @@ impl ImpactMap {
         &mut self,
         model: &Model,
         cause: ImpactCause,
-        set: &PointSet,
+        (set, scratch): (&PointSet, &mut JumpScratch),
         materials: &[Material],
         x: &DVector<Real>,
         modes: &[Mode],
@@ -703,13 +754,22 @@ impl ImpactMap {
     ) -> Result<Vec<ImpactEvent>, SimError> {
         let energy_before =
             energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
-        let delta_u = &set.minv_jt * x;
+        // Δu = M⁻¹ Jᵀ x and v⁺ = v⁻ + W x (`mul_to`: the products' own `gemm`).
+        let delta_u = &mut scratch.delta_u;
+        fit_vector(delta_u, set.minv_jt.nrows());
+        set.minv_jt.mul_to(x, delta_u);
         for (ur, du) in u.iter_mut().zip(delta_u.iter()) {
             *ur += du;
         }
         let energy_after =
             energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
-        let v_plus = &set.v + &set.w * x;
+        let v_plus = &mut scratch.v_plus;
+        fit_vector(v_plus, set.v.len());
+        set.w.mul_to(x, v_plus);
+        for (vp, v) in v_plus.iter_mut().zip(set.v.iter()) {
+            *vp += v; // `v + W x`: addition commutes
+        }
+        let (delta_u, v_plus) = (&scratch.delta_u, &scratch.v_plus);
         // An impulse below rounding of the largest one is no impact.
         let negligible = 1e-12 * x.amax();
         let mut events = Vec::new();
@@ -776,13 +836,53 @@ impl ImpactMap {
     }
 }
 
-/// Several contact points at one instant: their frames, `M⁻¹ Jᵀ` (nu × 2k),
+/// Several contact points at one instant: their frames, `J` (2k × nu), `M⁻¹ Jᵀ` (nu × 2k),
 /// `W = J M⁻¹ Jᵀ` (2k × 2k) and velocities `(v_n, v_t)` (2k).
+#[derive(Clone, Debug, Default)]
 struct PointSet {
     frames: Vec<ContactFrame>,
+    jac: DMatrix<Real>,
     minv_jt: DMatrix<Real>,
     w: DMatrix<Real>,
     v: DVector<Real>,
+}
+
+/// The scratch of the impacts of several points ([`ImpactMap::apply_many`],
+/// [`ImpactMap::close`]), kept between calls: sized to the most points met, then nothing
+/// allocated but the ledger entries.
+#[derive(Clone, Debug, Default)]
+struct Many {
+    /// The points: frames, rows, `W`, velocities.
+    set: PointSet,
+    /// One column of `M⁻¹ Jᵀ` being solved (nu).
+    column: Vec<Real>,
+    /// The generalized Newton law's complementarity problem: `b` (2k), the allowed modes
+    /// (k) and its solutions.
+    b: DVector<Real>,
+    allowed: Vec<Allowed>,
+    solutions: Vec<lcp::Solution>,
+    /// The end of a rocking accumulation: the unknown rows of `W`, whether each point
+    /// stops, the sliding friction per unit normal impulse of each point (k), `W_rr`, its
+    /// right-hand side `−v_r⁻`, the solution `P_r` and its workspace, the impulses `x` (2k).
+    rows: Vec<usize>,
+    stops: Vec<bool>,
+    friction: Vec<Real>,
+    w_rr: DMatrix<Real>,
+    rhs: DVector<Real>,
+    p_r: DVector<Real>,
+    ls: MinNorm,
+    x: DVector<Real>,
+    /// The modes and materials reported (k).
+    modes: Vec<Mode>,
+    materials: Vec<Material>,
+    jump: JumpScratch,
+}
+
+/// The scratch of [`ImpactMap::jump`]: `Δu` (nu) and `v⁺` (2k).
+#[derive(Clone, Debug, Default)]
+struct JumpScratch {
+    delta_u: DVector<Real>,
+    v_plus: DVector<Real>,
 }
 
 /// The name of a contact pair, `<collider a>/<collider b>`.

@@ -408,8 +408,8 @@ impl<'m> Simulation<'m> {
             // A new simulation: nothing to forget.
             return;
         }
-        self.system.persistent.set(Vec::new(), Vec::new());
-        self.gaps.set_closed(Vec::new(), Vec::new());
+        self.system.persistent.set_from(&[], &[]);
+        self.gaps.set_closed(&[], &[]);
         self.gaps.candidates.clear();
         self.gaps.disarmed.clear();
         self.stepper.set_h_max(self.h_max);

@@ -289,6 +289,9 @@ pub struct Persistent {
     system: lcp::ModeSystem,
     modes: Vec<Mode>,
     reference: Vec<Real>,
+    /// The buffers of the next mode selection ([`Self::select`], given back by
+    /// [`Self::recycle_selection`]).
+    selection: Selection,
     /// The least and largest values of each closed point's force functions over the
     /// evaluations since the last [`Self::clear_bounds`] (see [`Self::force_functions`];
     /// the slip velocity `s V_t + margin` in place of a sliding point's friction margin):
@@ -330,6 +333,7 @@ impl Persistent {
             system: lcp::ModeSystem::new(),
             modes: Vec::new(),
             reference: Vec::new(),
+            selection: Selection::default(),
             bounds: Vec::new(),
         }
     }
@@ -339,17 +343,45 @@ impl Persistent {
         &self.closed
     }
 
-    /// Replaces the closed points (`mu` from their pairs, after overrides).
+    /// Replaces the closed points (`mu` from their pairs, after overrides): see
+    /// [`Self::set_from`].
     pub fn set(&mut self, closed: Vec<Closed>, mu: Vec<Real>) {
-        let (k, nu) = (closed.len(), self.column.len());
-        self.closed = closed;
-        self.mu = mu;
-        self.jac = DMatrix::zeros(2 * k, nu);
-        self.y = DMatrix::zeros(nu, 2 * k);
-        self.b = DVector::zeros(2 * k);
-        self.c = DVector::zeros(2 * k);
-        self.ev.a = DMatrix::zeros(2 * k, 2 * k);
-        self.ev.lambda = DVector::zeros(2 * k);
+        self.set_from(&closed, &mu);
+    }
+
+    /// Replaces the closed points, copied into the kept buffers (`mu` from their pairs,
+    /// after overrides): no allocation once they have held the most closed points (a mode
+    /// selection's candidates among them).
+    pub fn set_from(&mut self, closed: &[Closed], mu: &[Real]) {
+        self.closed.clear();
+        self.closed.extend_from_slice(closed);
+        self.mu.clear();
+        self.mu.extend_from_slice(mu);
+        self.fit_closed();
+    }
+
+    /// The coefficients of friction of the closed points, in order.
+    pub fn mus(&self) -> &[Real] {
+        &self.mu
+    }
+
+    /// The buffers of the closed points' rows, `A`, `b`, `c` and forces fitted to them and
+    /// zeroed (their storage kept: [`fit_matrix`]), the last evaluation and the bounds
+    /// forgotten.
+    fn fit_closed(&mut self) {
+        let (k, nu) = (self.closed.len(), self.column.len());
+        fit_matrix(&mut self.jac, 2 * k, nu);
+        self.jac.fill(0.0);
+        fit_matrix(&mut self.y, nu, 2 * k);
+        self.y.fill(0.0);
+        fit_vector(&mut self.b, 2 * k);
+        self.b.fill(0.0);
+        fit_vector(&mut self.c, 2 * k);
+        self.c.fill(0.0);
+        fit_matrix(&mut self.ev.a, 2 * k, 2 * k);
+        self.ev.a.fill(0.0);
+        fit_vector(&mut self.ev.lambda, 2 * k);
+        self.ev.lambda.fill(0.0);
         self.ev.points.clear();
         self.ev.at = None;
         self.resolved = false;
@@ -860,6 +892,9 @@ impl Persistent {
     /// dynamics of that state), by the complementarity problem at the acceleration level. A
     /// point slipping faster than `v_slip` keeps its slip direction; a candidate with a
     /// given slip takes it.
+    ///
+    /// The selection is written into the buffers of the one handed back by
+    /// [`Self::recycle_selection`] (none allocated once they have held the largest).
     pub fn select(
         &mut self,
         model: &Model,
@@ -869,55 +904,60 @@ impl Persistent {
         v_slip: Real,
     ) -> Result<Selection, SimError> {
         // Assemble with provisional modes (the rows do not depend on them).
-        let closed: Vec<Closed> = candidates
-            .iter()
-            .map(|c| Closed {
-                pair: c.pair,
-                local: c.local,
-                hold: Hold::Stick,
-                slip_margin: 0.0,
-                reference: (0.0, 0.0),
-            })
-            .collect();
-        self.set(closed, candidates.iter().map(|c| c.mu).collect());
+        self.closed.clear();
+        self.closed.extend(candidates.iter().map(|c| Closed {
+            pair: c.pair,
+            local: c.local,
+            hold: Hold::Stick,
+            slip_margin: 0.0,
+            reference: (0.0, 0.0),
+        }));
+        self.mu.clear();
+        self.mu.extend(candidates.iter().map(|c| c.mu));
+        self.fit_closed();
         self.assemble(model, data, state, Accel::Compute)?;
-        let allowed: Vec<Allowed> = (self.ev.points.iter().zip(candidates))
-            .map(|(p, c)| Allowed {
+        let mut sel = std::mem::take(&mut self.selection);
+        sel.allowed.clear();
+        (sel.allowed).extend((self.ev.points.iter().zip(candidates)).map(|(p, c)| {
+            Allowed {
                 mu: c.mu,
                 open: true,
                 slip: c
                     .slip
                     .or_else(|| (p.v_t.abs() > v_slip).then(|| p.v_t.signum())),
-            })
-            .collect();
+            }
+        }));
         // No solution (Lemke's ray) is Painlevé's inconsistency for the caller to resolve.
-        let solutions = match lcp::solutions(&mut self.lcp, &self.ev.a, &self.b, &allowed) {
-            Ok(all) => all,
-            Err(lcp::LcpError::NoSolution { .. }) => Vec::new(),
+        let (a, b) = (&self.ev.a, &self.b);
+        match lcp::solutions_into(&mut self.lcp, a, b, &sel.allowed, &mut sel.solutions) {
+            Ok(()) | Err(lcp::LcpError::NoSolution { .. }) => {}
             Err(e) => {
                 return Err(SimError::Contact {
                     t: state.0,
                     message: format!("the contact modes of {} points: {e}", candidates.len()),
                 });
             }
-        };
-        let painleve: Vec<Real> = (0..candidates.len())
-            .map(|i| match allowed[i].slip {
-                Some(s) => {
-                    self.ev.a[(2 * i, 2 * i)] - allowed[i].mu * s * self.ev.a[(2 * i, 2 * i + 1)]
-                }
-                None => Real::INFINITY,
-            })
-            .collect();
-        Ok(Selection {
-            a: self.ev.a.clone(),
-            b: self.b.clone(),
-            allowed,
-            points: self.ev.points.clone(),
-            free: (0..candidates.len()).map(|i| self.b[2 * i]).collect(),
-            solutions,
-            painleve,
-        })
+        }
+        sel.painleve.clear();
+        (sel.painleve).extend((0..candidates.len()).map(|i| match sel.allowed[i].slip {
+            Some(s) => a[(2 * i, 2 * i)] - sel.allowed[i].mu * s * a[(2 * i, 2 * i + 1)],
+            None => Real::INFINITY,
+        }));
+        fit_matrix(&mut sel.a, a.nrows(), a.ncols());
+        sel.a.copy_from(a);
+        fit_vector(&mut sel.b, b.len());
+        sel.b.copy_from(b);
+        sel.points.clear();
+        sel.points.extend_from_slice(&self.ev.points);
+        sel.free.clear();
+        sel.free.extend((0..candidates.len()).map(|i| b[2 * i]));
+        Ok(sel)
+    }
+
+    /// Takes back a selection of [`Self::select`] whose numbers are no longer needed: the
+    /// next selection is written into its buffers.
+    pub fn recycle_selection(&mut self, sel: Selection) {
+        self.selection = sel;
     }
 }
 
@@ -935,7 +975,7 @@ pub struct Candidate {
 }
 
 /// The outcome of a mode selection.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Selection {
     /// The problem `w = A x + b` of the candidates (2k × 2k, 2k), and their allowed modes.
     pub a: DMatrix<Real>,

@@ -250,7 +250,6 @@ fn assert_events_allocate_nothing(path: &str, t_end: f64, at_least: Callbacks) {
 /// Kane's double pendulum to 5 s: 11 impacts, the end of their accumulation (0.19 s), the
 /// tip sliding, its slip stopping and reversing, and sticking.
 #[test]
-#[ignore = "until the mode selection (persistent.rs, lcp/), the impact map's ledger entries (impact_map.rs) and Persistent::set stop allocating (helper-32's branch)"]
 fn events_allocate_nothing_kane() {
     let at_least = Callbacks {
         impacts: 11,
@@ -262,7 +261,6 @@ fn events_allocate_nothing_kane() {
 
 /// The bouncing ball: its bounces, the end of their accumulation, the ball at rest.
 #[test]
-#[ignore = "until the mode selection (persistent.rs, lcp/), the impact map's ledger entries (impact_map.rs) and Persistent::set stop allocating (helper-32's branch)"]
 fn events_allocate_nothing_bouncing_ball() {
     let at_least = Callbacks {
         impacts: 20,
@@ -275,7 +273,6 @@ fn events_allocate_nothing_bouncing_ball() {
 /// Several points: the rod landing on one end and striking with the other (impacts in
 /// cascade, Moreau's law over two points), coming to rest flat.
 #[test]
-#[ignore = "until the mode selection (persistent.rs, lcp/), the impact map's ledger entries (impact_map.rs) and Persistent::set stop allocating (helper-32's branch)"]
 fn events_of_two_points_allocate_nothing() {
     let at_least = Callbacks {
         impacts: 30,
@@ -287,7 +284,6 @@ fn events_of_two_points_allocate_nothing() {
 
 /// The block rocking on its corners to rest: rocking ends.
 #[test]
-#[ignore = "until the mode selection (persistent.rs, lcp/), the impact map's ledger entries (impact_map.rs) and Persistent::set stop allocating (helper-32's branch)"]
 fn rocking_ends_allocate_nothing() {
     let at_least = Callbacks {
         impacts: 10,
