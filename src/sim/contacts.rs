@@ -193,7 +193,7 @@ impl Simulation<'_> {
                 if impacts_here == 0 {
                     self.sample(t, y, true, observer)?;
                 }
-                r.events.clear();
+                self.map.recycle(&mut r.events);
                 for &id in &r.ids {
                     r.members.clear();
                     r.members.extend(
@@ -491,11 +491,11 @@ impl Simulation<'_> {
             observer.impact(self.model, ev).map_err(|e| e.at(t))?;
             if let Some(reason) = self.guard.after_impact(t) {
                 let pair = ev.frame.pair;
-                events.clear();
+                self.map.recycle(events);
                 return Ok(Some(self.stall(t, pair, reason)));
             }
         }
-        events.clear();
+        self.map.recycle(events);
         Ok(None)
     }
 
@@ -594,7 +594,7 @@ impl Simulation<'_> {
                 } else {
                     chosen.filter(|c| g.slow.iter().all(|p| p.pair == c.pair))
                 };
-                events.truncate(start);
+                self.map.recycle_from(events, start);
                 self.impact_round(t, y, touching, approaching, chosen, true, events, observer)?;
                 state.ended = true;
                 // A rocking body: the plastic impact lifts another touching point, too
@@ -695,9 +695,10 @@ impl Simulation<'_> {
                     .message(t, Level::Warning, text)
                     .map_err(|e| e.at(t));
             }
-            let result = result.and_then(|()| self.map.apply_many(self.model, &points, t, q, u));
+            let result =
+                result.and_then(|()| self.map.apply_many(self.model, &points, t, q, u, events));
             self.scratch.points = points;
-            events.extend(result?);
+            result?;
         }
         if plastic {
             for ev in &mut events[start..] {
@@ -805,9 +806,20 @@ impl Simulation<'_> {
             // Every held point, in order (`slides` is indexed like `held`).
             self.points_below(held, Real::INFINITY, &mut r.points);
             let (q, u) = y[..nqu].split_at_mut(n);
-            let mut closing =
-                (self.map).close(self.model, &r.points, slides, self.scales.v_rest, t, q, u)?;
-            self.support(t, y, held, &mut closing)?;
+            self.map.recycle(&mut r.closing);
+            let v_rest = self.scales.v_rest;
+            (self.map).close(
+                self.model,
+                &r.points,
+                slides,
+                v_rest,
+                t,
+                q,
+                u,
+                &mut r.closing,
+            )?;
+            self.support(t, y, held, &mut r.closing)?;
+            let closing = &r.closing;
             let nearest = |p: Vec2, set: &[Touch]| {
                 (0..set.len()).min_by(|&i, &j| {
                     let d = |k: usize| (set[k].contact.point_a - p).length();
@@ -870,7 +882,8 @@ impl Simulation<'_> {
                 best = Some(violation);
                 r.best_u.clear();
                 r.best_u.extend_from_slice(&y[n..nqu]);
-                r.best = closing;
+                self.map.recycle(&mut r.best);
+                std::mem::swap(&mut r.best, &mut r.closing);
             }
             if round == last || (r.approaching.is_empty() && released_all && r.outside.is_empty()) {
                 // The round that came closest to the conditions (this one, unless an
@@ -1635,7 +1648,7 @@ impl Simulation<'_> {
             q,
             u,
         )?;
-        events.clear();
+        self.map.recycle(events);
         events.extend(ev);
         self.ledger(t, events, observer)?;
         Ok(())
@@ -1860,6 +1873,8 @@ struct RockingScratch {
     /// `u` of the round closest to the conditions, and its entries.
     best_u: Vec<Real>,
     best: Vec<ImpactEvent>,
+    /// The entries of the round's jump.
+    closing: Vec<ImpactEvent>,
 }
 
 /// The buffers of `select_modes`.

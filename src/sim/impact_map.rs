@@ -202,6 +202,9 @@ pub struct ImpactMap {
     lcp: lcp::Solver,
     /// The scratch of the impacts of several points.
     many: Many,
+    /// The `Δu` of ledger entries handed back ([`Self::recycle`]), refilled by the next
+    /// entries: a run's impacts allocate nothing once it has had its largest impact.
+    spare: Vec<Vec<Real>>,
 }
 
 impl ImpactMap {
@@ -218,7 +221,26 @@ impl ImpactMap {
             x_t: vec![0.0; nu],
             lcp: lcp::Solver::new(),
             many: Many::default(),
+            spare: Vec::new(),
         }
+    }
+
+    /// Empties `events`, keeping their `Δu` buffers for the next ledger entries.
+    pub fn recycle(&mut self, events: &mut Vec<ImpactEvent>) {
+        self.recycle_from(events, 0);
+    }
+
+    /// Drops the entries of `events` from `start` on, keeping their `Δu` buffers for the
+    /// next ledger entries.
+    pub fn recycle_from(&mut self, events: &mut Vec<ImpactEvent>, start: usize) {
+        (self.spare).extend(events.drain(start..).map(|ev| ev.delta_u));
+    }
+
+    /// An empty `Δu` for a ledger entry: a recycled one if there is one.
+    fn delta_u_buffer(&mut self) -> Vec<Real> {
+        let mut buffer = self.spare.pop().unwrap_or_default();
+        buffer.clear();
+        buffer
     }
 
     /// The same, with `still` (m/s): in a simultaneous impact, a point whose normal speed
@@ -418,9 +440,8 @@ impl ImpactMap {
         let energy_before =
             energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
         let (i_n, i_t) = (outcome.impulse.n, outcome.impulse.t);
-        let delta_u: Vec<Real> = (self.x_n.iter().zip(&self.x_t))
-            .map(|(xn, xt)| xn * i_n + xt * i_t)
-            .collect();
+        let mut delta_u = self.delta_u_buffer();
+        delta_u.extend((self.x_n.iter().zip(&self.x_t)).map(|(xn, xt)| xn * i_n + xt * i_t));
         for (ur, du) in u.iter_mut().zip(&delta_u) {
             *ur += du;
         }
@@ -470,14 +491,16 @@ impl ImpactMap {
         t: Real,
         q: &[Real],
         u: &mut [Real],
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+        out: &mut Vec<ImpactEvent>,
+    ) -> Result<(), SimError> {
         let mut many = std::mem::take(&mut self.many);
-        let events = self.apply_many_with(&mut many, model, points, t, q, u);
+        let result = self.apply_many_with(&mut many, model, points, t, q, u, out);
         self.many = many;
-        events
+        result
     }
 
     /// [`Self::apply_many`] with the scratch `s` (taken out of `self`).
+    #[allow(clippy::too_many_arguments)]
     fn apply_many_with(
         &mut self,
         s: &mut Many,
@@ -486,7 +509,8 @@ impl ImpactMap {
         t: Real,
         q: &[Real],
         u: &mut [Real],
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+        out: &mut Vec<ImpactEvent>,
+    ) -> Result<(), SimError> {
         let k = points.len();
         let at = points.iter().map(|p| (p.0, p.1));
         self.assemble(&mut s.set, &mut s.column, model, at, t, q, u)?;
@@ -528,9 +552,8 @@ impl ImpactMap {
             &s.materials,
             &sol.x,
             &sol.modes,
-            t,
-            q,
-            u,
+            (t, q, u),
+            out,
         )
     }
 
@@ -578,11 +601,12 @@ impl ImpactMap {
         t: Real,
         q: &[Real],
         u: &mut [Real],
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+        out: &mut Vec<ImpactEvent>,
+    ) -> Result<(), SimError> {
         let mut many = std::mem::take(&mut self.many);
-        let events = self.close_with(&mut many, model, points, slides, v_stop, t, q, u);
+        let result = self.close_with(&mut many, model, points, slides, v_stop, (t, q, u), out);
         self.many = many;
-        events
+        result
     }
 
     /// [`Self::close`] with the scratch `s` (taken out of `self`).
@@ -594,10 +618,9 @@ impl ImpactMap {
         points: &[(PairId, PairContact, Material)],
         slides: &[Option<Real>],
         v_stop: Real,
-        t: Real,
-        q: &[Real],
-        u: &mut [Real],
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+        (t, q, u): (Real, &[Real], &mut [Real]),
+        out: &mut Vec<ImpactEvent>,
+    ) -> Result<(), SimError> {
         let k = points.len();
         let at = points.iter().map(|p| (p.0, p.1));
         self.assemble(&mut s.set, &mut s.column, model, at, t, q, u)?;
@@ -686,9 +709,8 @@ impl ImpactMap {
             &s.materials,
             &s.x,
             &s.modes,
-            t,
-            q,
-            u,
+            (t, q, u),
+            out,
         )
     }
 
@@ -748,10 +770,9 @@ impl ImpactMap {
         materials: &[Material],
         x: &DVector<Real>,
         modes: &[Mode],
-        t: Real,
-        q: &[Real],
-        u: &mut [Real],
-    ) -> Result<Vec<ImpactEvent>, SimError> {
+        (t, q, u): (Real, &[Real], &mut [Real]),
+        out: &mut Vec<ImpactEvent>,
+    ) -> Result<(), SimError> {
         let energy_before =
             energy(model, &mut self.data, t, q, u).map_err(|e| SimError::at(t, e))?;
         // Δu = M⁻¹ Jᵀ x and v⁺ = v⁻ + W x (`mul_to`: the products' own `gemm`).
@@ -772,7 +793,7 @@ impl ImpactMap {
         let (delta_u, v_plus) = (&scratch.delta_u, &scratch.v_plus);
         // An impulse below rounding of the largest one is no impact.
         let negligible = 1e-12 * x.amax();
-        let mut events = Vec::new();
+        let start = out.len();
         let mut running = energy_before;
         for (i, &material) in materials.iter().enumerate() {
             let impulse = Impulse::new(x[2 * i], x[2 * i + 1]);
@@ -802,7 +823,9 @@ impl ImpactMap {
             let delta_e = energy_change(impulse, v_a, v_s);
             let before = running;
             running.kinetic += delta_e;
-            events.push(ImpactEvent {
+            let mut entry_delta_u = self.delta_u_buffer();
+            entry_delta_u.extend_from_slice(delta_u.as_slice());
+            out.push(ImpactEvent {
                 index: 0,
                 cause,
                 t,
@@ -823,16 +846,16 @@ impl ImpactMap {
                     work_t: end.work_t,
                     mirrored: false,
                 },
-                delta_u: delta_u.iter().copied().collect(),
+                delta_u: entry_delta_u,
                 energy_before: before,
                 energy_after: running,
                 support: None,
             });
         }
-        if let Some(last) = events.last_mut() {
+        if let Some(last) = out[start..].last_mut() {
             last.energy_after = energy_after;
         }
-        Ok(events)
+        Ok(())
     }
 }
 
