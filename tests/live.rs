@@ -242,8 +242,14 @@ fn a_live_run_serves_the_log_s_topics_paced_and_writes_the_same_log() {
     let tfs: Vec<(u64, FrameTransforms)> = (received["/tf"].iter())
         .map(|(time, data)| (*time, FrameTransforms::decode(&data[..]).unwrap()))
         .collect();
+    // A sample's /state goes out before its /tf: the subscription, which takes effect
+    // while the run is served, may fall between the two, and the first /tf then has no
+    // /state (seen on CI: a /tf at the first impact's instant before the first /state).
+    // After it, they come in pairs.
+    let skipped = tfs.len().saturating_sub(states.len());
+    assert!(skipped <= 1, "{skipped} /tf messages without their /state");
     assert_eq!(
-        tfs.iter().map(|(t, _)| *t).collect::<Vec<_>>(),
+        tfs[skipped..].iter().map(|(t, _)| *t).collect::<Vec<_>>(),
         states.iter().map(|(t, _)| *t).collect::<Vec<_>>()
     );
     let impacts: Vec<ImpactRecord> = (received["/impacts"].iter())
