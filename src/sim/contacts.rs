@@ -109,6 +109,20 @@ struct Touch {
 type InstantEvents<'a> = (&'a [(PairId, Vec2, Real)], &'a [(PairId, Vec2)]);
 
 impl Simulation<'_> {
+    /// `f` with the kept buffer `field` of the contact stage's scratch, taken out of
+    /// `self` for the call (so that `f` may borrow `self` too) and put back after it,
+    /// whatever `f` returns.
+    fn with_scratch<S: Default, R>(
+        &mut self,
+        field: fn(&mut Scratch) -> &mut S,
+        f: impl FnOnce(&mut Self, &mut S) -> R,
+    ) -> R {
+        let mut buffer = std::mem::take(field(&mut self.scratch));
+        let result = f(self, &mut buffer);
+        *field(&mut self.scratch) = buffer;
+        result
+    }
+
     /// Stage `contacts` at the current time (see the module doc). Restarts the integrator
     /// when anything changed; returns a stop reason if the run cannot go on.
     pub(super) fn contacts(
@@ -146,10 +160,10 @@ impl Simulation<'_> {
         event: Option<&Event>,
         observer: &mut dyn Observer,
     ) -> Result<(bool, Option<StopReason>), SimError> {
-        let mut rounds = std::mem::take(&mut self.scratch.rounds);
-        let result = self.rounds(t, y, event, observer, &mut rounds);
-        self.scratch.rounds = rounds;
-        result
+        self.with_scratch(
+            |s| &mut s.rounds,
+            |sim, r| sim.rounds(t, y, event, observer, r),
+        )
     }
 
     /// [`Self::contacts_at`] in the buffers `r`.
@@ -534,10 +548,10 @@ impl Simulation<'_> {
         events: &mut Vec<ImpactEvent>,
         observer: &mut dyn Observer,
     ) -> Result<(), SimError> {
-        let mut g = std::mem::take(&mut self.scratch.group);
-        let result = self.group_impacts_in(t, y, touching, state, events, observer, &mut g);
-        self.scratch.group = g;
-        result
+        self.with_scratch(
+            |s| &mut s.group,
+            |sim, g| sim.group_impacts_in(t, y, touching, state, events, observer, g),
+        )
     }
 
     /// [`Self::group_impacts`] in the buffers `g`.
@@ -730,17 +744,19 @@ impl Simulation<'_> {
         if slow.is_empty() {
             return Ok(());
         }
-        let mut points = std::mem::take(&mut self.scratch.candidates);
-        points.clear();
-        points.extend(slow.iter().map(|p| Candidate {
-            pair: p.pair,
-            local: p.local,
-            mu: 0.0,
-            slip: None,
-        }));
-        let sel = self.select_at(t, y, &points, Real::INFINITY);
-        self.scratch.candidates = points;
-        let sel = sel?;
+        let sel = self.with_scratch(
+            |s| &mut s.candidates,
+            |sim, points| {
+                points.clear();
+                points.extend(slow.iter().map(|p| Candidate {
+                    pair: p.pair,
+                    local: p.local,
+                    mu: 0.0,
+                    slip: None,
+                }));
+                sim.select_at(t, y, points, Real::INFINITY)
+            },
+        )?;
         let mut free = sel.free.iter();
         slow.retain(|p| {
             free.next()
@@ -772,10 +788,10 @@ impl Simulation<'_> {
         held: &mut Vec<Touch>,
         events: &mut Vec<ImpactEvent>,
     ) -> Result<(), SimError> {
-        let mut r = std::mem::take(&mut self.scratch.rocking);
-        let result = self.rocking_end_in(t, y, held, events, &mut r);
-        self.scratch.rocking = r;
-        result
+        self.with_scratch(
+            |s| &mut s.rocking,
+            |sim, r| sim.rocking_end_in(t, y, held, events, r),
+        )
     }
 
     /// [`Self::rocking_end`] in the buffers `r`.
@@ -933,17 +949,19 @@ impl Simulation<'_> {
             .filter(|ev| ev.v_a.n > 0.0)
             .map(|ev| ev.v_a.n)
             .fold(0.0, Real::max);
-        let mut candidates = std::mem::take(&mut self.scratch.candidates);
-        candidates.clear();
-        candidates.extend(held.iter().map(|p| Candidate {
-            pair: p.pair,
-            local: p.local,
-            mu: self.material(p.pair).mu,
-            slip: None,
-        }));
-        let sel = self.select_at(t, y, &candidates, 1e3 * self.scales.v_tiny);
-        self.scratch.candidates = candidates;
-        let sel = sel?;
+        let sel = self.with_scratch(
+            |s| &mut s.candidates,
+            |sim, candidates| {
+                candidates.clear();
+                candidates.extend(held.iter().map(|p| Candidate {
+                    pair: p.pair,
+                    local: p.local,
+                    mu: sim.material(p.pair).mu,
+                    slip: None,
+                }));
+                sim.select_at(t, y, candidates, 1e3 * sim.scales.v_tiny)
+            },
+        )?;
         let Some(chosen) = most_open_first(&sel.solutions) else {
             return Err(SimError::Contact {
                 t,
@@ -1122,16 +1140,18 @@ impl Simulation<'_> {
         observer: &mut dyn Observer,
         closed: &mut Vec<Closed>,
     ) -> Result<Selected, SimError> {
-        let mut g = std::mem::take(&mut self.scratch.select);
-        (self.coupling).groups(self.model, resting.iter().map(|p| p.pair), &mut g.group);
-        super::coupling::distinct(g.group.iter().copied(), &mut g.ids);
-        let result = if g.ids.len() <= 1 {
-            self.select_group(t, y, resting, events, observer, closed)
-        } else {
-            self.select_groups(t, y, resting, events, observer, closed, &mut g)
-        };
-        self.scratch.select = g;
-        result
+        self.with_scratch(
+            |s| &mut s.select,
+            |sim, g| {
+                (sim.coupling).groups(sim.model, resting.iter().map(|p| p.pair), &mut g.group);
+                super::coupling::distinct(g.group.iter().copied(), &mut g.ids);
+                if g.ids.len() <= 1 {
+                    sim.select_group(t, y, resting, events, observer, closed)
+                } else {
+                    sim.select_groups(t, y, resting, events, observer, closed, g)
+                }
+            },
+        )
     }
 
     /// [`Self::select_modes`] of several groups, in the buffers `g` (`g.group`: the group
@@ -1190,10 +1210,10 @@ impl Simulation<'_> {
         if resting.is_empty() {
             return Ok(Selected::Set);
         }
-        let mut g = std::mem::take(&mut self.scratch.select_group);
-        let result = self.select_group_in(t, y, resting, events, observer, closed, &mut g);
-        self.scratch.select_group = g;
-        result
+        self.with_scratch(
+            |s| &mut s.select_group,
+            |sim, g| sim.select_group_in(t, y, resting, events, observer, closed, g),
+        )
     }
 
     /// [`Self::select_group`] of a non-empty group, in the buffers `g`.
@@ -1224,20 +1244,22 @@ impl Simulation<'_> {
                 slips[i] = Some(s);
             }
         }
-        let mut candidates = std::mem::take(&mut self.scratch.candidates);
-        candidates.clear();
-        candidates.extend(
-            (resting.iter().zip(slips.iter())).map(|(p, slip)| Candidate {
-                pair: p.pair,
-                local: p.local,
-                mu: self.material(p.pair).mu,
-                slip: *slip,
-            }),
-        );
         let v_slip = 1e3 * self.scales.v_tiny;
-        let sel = self.select_at(t, y, &candidates, v_slip);
-        self.scratch.candidates = candidates;
-        let mut sel = sel?;
+        let mut sel = self.with_scratch(
+            |s| &mut s.candidates,
+            |sim, candidates| {
+                candidates.clear();
+                candidates.extend(
+                    (resting.iter().zip(slips.iter())).map(|(p, slip)| Candidate {
+                        pair: p.pair,
+                        local: p.local,
+                        mu: sim.material(p.pair).mu,
+                        slip: *slip,
+                    }),
+                );
+                sim.select_at(t, y, candidates, v_slip)
+            },
+        )?;
         // A point that starts to slip from rest must slip the way its acceleration goes:
         // a solution that slows it down (s ẇ_t < 0 beyond rounding) is no start of a slip —
         // its slip would stop at once, and the selection would take it again (the 8-link
