@@ -244,16 +244,16 @@ impl Simulation<'_> {
             }
             // The hops that start in the groups that had impacts (unless their
             // accumulation ended).
-            r.members.clear();
-            r.members.extend(
+            r.hops.clear();
+            r.hops.extend(
                 (0..touching.len())
                     .filter(|&i| {
                         (r.groups.iter()).any(|g| g.id == group[i] && g.impacts > 0 && !g.ended)
                     })
                     .map(|i| touching[i]),
             );
-            if !r.members.is_empty() {
-                self.remember_hops(t, &r.members);
+            if !r.hops.is_empty() {
+                self.remember_hops(t, &r.hops);
             }
             // 3. Modes of the touching points that do not separate.
             r.resting.clear();
@@ -1844,8 +1844,10 @@ struct Rounds {
     group: Vec<usize>,
     /// The groups with an approaching point.
     ids: Vec<usize>,
-    /// The touching points of one group; then the hops that start.
+    /// The touching points of one group.
     members: Vec<Touch>,
+    /// The touching points whose hops start (in the groups that had impacts).
+    hops: Vec<Touch>,
     /// The impacts so far at this instant, group by group.
     groups: Vec<GroupImpacts>,
     /// The ledger entries of the round.
