@@ -103,6 +103,19 @@ impl Enumeration {
         self.spare.append(out);
     }
 
+    /// The spare solution of the largest buffers, to be written into, or an empty one:
+    /// Lemke's solution, of the most points (the enumeration's are of four at most, and
+    /// solutions that the caller drops are replaced by empty ones).
+    pub(super) fn spare(&mut self) -> Solution {
+        let largest = (0..self.spare.len()).max_by_key(|&i| self.spare[i].modes.capacity());
+        largest.map_or_else(Solution::default, |i| self.spare.swap_remove(i))
+    }
+
+    /// Keeps `sol` as a spare.
+    pub(super) fn keep(&mut self, sol: Solution) {
+        self.spare.push(sol);
+    }
+
     /// Whether the combination `self.modes` is consistent: its system solved (into
     /// `self.system`) and its sign conditions met.
     fn solve_modes(
@@ -158,11 +171,7 @@ impl Enumeration {
             Some(same) if open(modes) > open(&same.modes) => same,
             Some(_) => return,
             None => {
-                all.push(self.spare.pop().unwrap_or_else(|| Solution {
-                    modes: Vec::new(),
-                    x: DVector::zeros(0),
-                    w: DVector::zeros(0),
-                }));
+                all.push(self.spare.pop().unwrap_or_default());
                 let last = all.len() - 1;
                 &mut all[last]
             }
@@ -395,6 +404,22 @@ impl ModeSystem {
         Some(true)
     }
 
+    /// [`forces`] without allocating once the workspace has met the size: the forces `x`
+    /// of the modes (the proportional split of redundant sticking points) and
+    /// `w = A x + b`, if the modes' equations can hold; the same numbers to the bit. `mu`
+    /// has one entry per contact.
+    pub(super) fn forces(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        mu: &[Real],
+        modes: &[Mode],
+    ) -> Option<(&DVector<Real>, &DVector<Real>)> {
+        let scales = (a.amax().max(Real::MIN_POSITIVE), b.amax());
+        self.solve(a, b, |i| mu[i], modes, scales, None)?;
+        Some((&self.x, &self.w))
+    }
+
     /// Whether `x` meets the equations, to `TOL` of the scales.
     fn holds(&mut self, x: &DVector<Real>, (scale_a, scale_b): (Real, Real)) -> bool {
         fit_vector(&mut self.tmp, x.len());
@@ -500,6 +525,9 @@ impl ModeSystem {
                 self.scaled.column_mut(j).scale_mut(*s);
             }
             let mut y = std::mem::take(&mut self.y);
+            // Its length first (every entry is then written): the solve would otherwise
+            // replace a vector of another length by a new one.
+            fit_vector(&mut y, m);
             self.ls.solve(&self.scaled, &self.rhs, &mut y);
             y.component_mul_assign(&self.scale);
             if y.iter().all(|v| v.is_finite()) && self.holds(&y, scales) {

@@ -77,6 +77,7 @@ use nalgebra::{DMatrix, DMatrixView, DVector, DVectorView};
 use super::lemke::{Lemke, LemkeError, LemkeStatus};
 use super::repair;
 use super::{Allowed, Mode, Solution, TOL};
+use crate::linalg::fit_vector;
 use crate::math::Real;
 
 /// Why [`Solver::solve`] returned no solution.
@@ -198,6 +199,11 @@ pub struct Solver {
     pivots: usize,
     /// A covering vector of a retry (k).
     cover: Vec<Real>,
+    /// The polish's solution (the forces of Lemke's modes solved again), against Lemke's
+    /// own.
+    polish: Solution,
+    /// The buffers of the polish and the repair.
+    fix: repair::Workspace,
     /// The enumeration's workspace, for [`super::solutions_into`].
     pub(super) enumeration: super::Enumeration,
 }
@@ -231,6 +237,22 @@ impl Solver {
         b: &DVector<Real>,
         allowed: &[Allowed],
     ) -> Result<Solution, LcpError> {
+        let mut sol = Solution::default();
+        self.solve_into(a, b, allowed, &mut sol)?;
+        Ok(sol)
+    }
+
+    /// [`Solver::solve`] written into `out` (its buffers reused): the same solution, to
+    /// the bit, without allocating once the solver and `out` have met a problem of this
+    /// size (Lemke's path, the polish and the repair work in the solver's buffers). On an
+    /// error `out`'s numbers mean nothing.
+    pub fn solve_into(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+        out: &mut Solution,
+    ) -> Result<(), LcpError> {
         self.validate(a, b, allowed)?;
         let k = self.layout(allowed);
         let sa = a.amax();
@@ -246,13 +268,14 @@ impl Solver {
         for attempt in 0..=RETRIES {
             match self.lemke_path(allowed, k, attempt, &mut seed)? {
                 LemkeStatus::Solved { .. } => {
-                    let (sol, violation) = self.polished(a, b, allowed);
+                    let violation = self.polished(a, b, allowed, out);
                     if violation <= CHECK_TOL {
-                        return Ok(sol);
+                        return Ok(());
                     }
                     // Lemke's modes wrong at a few points: single mode changes from them.
-                    if let Some(p) = repair::repair(a, b, allowed, &sol.modes) {
-                        return Ok(p);
+                    self.fix.start_from(&out.modes);
+                    if self.fix.repair(a, b, allowed, out) {
+                        return Ok(());
                     }
                     inaccurate = Some(inaccurate.map_or(violation, |v| v.min(violation)));
                 }
@@ -263,10 +286,11 @@ impl Solver {
         // Every path failed. With every slip unknown a ray is rounding's (the module doc),
         // and so is a cycle: the repair from the pressed points may still find the
         // solution.
-        if (inaccurate.is_some() || limit || !known_slip)
-            && let Some(sol) = repair::repair(a, b, allowed, &repair::start(b, allowed))
-        {
-            return Ok(sol);
+        if inaccurate.is_some() || limit || !known_slip {
+            self.fix.start_pressed(b, allowed);
+            if self.fix.repair(a, b, allowed, out) {
+                return Ok(());
+            }
         }
         Err(match inaccurate {
             Some(violation) => LcpError::Inaccurate { violation },
@@ -284,26 +308,27 @@ impl Solver {
     /// modes' conditions by more than [`POLISH_TOL`]: Lemke's modes (the active set) are
     /// right where its pivots' rounding is not (ill-conditioned bases of redundant points:
     /// 9e-7 on the 32-link chain lying on the floor); the forces of those modes from their
-    /// own linear system ([`super::forces`]) meet the conditions to rounding. With its
-    /// violation.
+    /// own linear system ([`super::forces`]) meet the conditions to rounding. Written into
+    /// `out`; returns its violation.
     fn polished(
-        &self,
+        &mut self,
         a: &DMatrix<Real>,
         b: &DVector<Real>,
         allowed: &[Allowed],
-    ) -> (Solution, Real) {
-        let mut sol = self.modes(a, b, allowed);
-        let mut violation = conditions_violation(a, b, allowed, &sol);
-        if violation > POLISH_TOL {
-            let mu: Vec<Real> = allowed.iter().map(|c| c.mu).collect();
-            if let Some(p) = super::forces(a, b, &mu, &sol.modes) {
-                let v = conditions_violation(a, b, allowed, &p);
-                if v < violation {
-                    (sol, violation) = (p, v);
-                }
+        out: &mut Solution,
+    ) -> Real {
+        self.modes(a, b, allowed, out);
+        let mut violation = self.fix.violation(a, b, allowed, out);
+        if violation > POLISH_TOL
+            && (self.fix).forces_into(a, b, allowed, &out.modes, &mut self.polish)
+        {
+            let v = self.fix.violation(a, b, allowed, &self.polish);
+            if v < violation {
+                std::mem::swap(out, &mut self.polish);
+                violation = v;
             }
         }
-        (sol, violation)
+        violation
     }
 
     /// Runs Lemke's algorithm on the assembled LCP of size `k` along the covering vector of
@@ -460,11 +485,13 @@ impl Solver {
     }
 
     /// The forces, modes and `w = A x + b` of Lemke's solution (module doc, "Back to
-    /// modes").
-    fn modes(&self, a: &DMatrix<Real>, b: &DVector<Real>, allowed: &[Allowed]) -> Solution {
+    /// modes"), written into `out`.
+    fn modes(&self, a: &DMatrix<Real>, b: &DVector<Real>, allowed: &[Allowed], out: &mut Solution) {
         let n = allowed.len();
         let z = self.lemke.z();
-        let mut x = DVector::zeros(2 * n);
+        let x = &mut out.x;
+        fit_vector(x, 2 * n);
+        x.fill(0.0);
         for (i, &(kind, o)) in self.kinds.iter().enumerate() {
             x[2 * i] = z[o];
             x[2 * i + 1] = match kind {
@@ -478,7 +505,8 @@ impl Solver {
         let sa = a.amax();
         let unit = if sa > 0.0 { b.amax() / sa } else { 0.0 };
         let tol_x = TOL * (x.amax() + unit);
-        let mut modes = Vec::with_capacity(n);
+        let modes = &mut out.modes;
+        modes.clear();
         for i in 0..n {
             if x[2 * i] <= tol_x {
                 x[2 * i] = 0.0;
@@ -489,7 +517,11 @@ impl Solver {
                 modes.push(Mode::Stick);
             }
         }
-        let w = a * &x + b;
+        // w = A x + b (`a * x + b`, in place).
+        let w = &mut out.w;
+        fit_vector(w, 2 * n);
+        a.mul_to(x, w);
+        *w += b;
         let tol_w = TOL * (b.amax() + a.amax() * x.amax());
         for (i, c) in allowed.iter().enumerate() {
             if modes[i] == Mode::Open {
@@ -502,7 +534,6 @@ impl Solver {
                 None => Mode::Stick,
             };
         }
-        Solution { modes, x, w }
     }
 }
 
@@ -522,11 +553,31 @@ pub fn conditions_violation(
     allowed: &[Allowed],
     sol: &Solution,
 ) -> Real {
+    let (mut w, mut diff) = (DVector::zeros(0), DVector::zeros(0));
+    violation_in(a, b, allowed, sol, &mut w, &mut diff)
+}
+
+/// [`conditions_violation`] with its `w = A x + b` recomputed into `w` and its difference
+/// from `sol.w` into `diff` (kept buffers, resized to 2n): the same number, to the bit.
+pub(super) fn violation_in(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    allowed: &[Allowed],
+    sol: &Solution,
+    w: &mut DVector<Real>,
+    diff: &mut DVector<Real>,
+) -> Real {
     let x = &sol.x;
     let sx = x.amax().max(Real::MIN_POSITIVE);
     let sw = (b.amax() + a.amax() * x.amax()).max(Real::MIN_POSITIVE);
-    let w = a * x + b;
-    let mut worst = (&w - &sol.w).amax() / sw;
+    // `a * x + b` and `(&w - &sol.w).amax()`, in place.
+    fit_vector(w, a.nrows());
+    a.mul_to(x, w);
+    *w += b;
+    fit_vector(diff, w.len());
+    diff.copy_from(w);
+    *diff -= &sol.w;
+    let mut worst = diff.amax() / sw;
     for (i, (c, mode)) in allowed.iter().zip(&sol.modes).enumerate() {
         let (xn, xt, wn, wt) = (x[2 * i], x[2 * i + 1], w[2 * i], w[2 * i + 1]);
         let v = match *mode {

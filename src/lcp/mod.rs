@@ -74,6 +74,17 @@ pub struct Solution {
     pub w: DVector<Real>,
 }
 
+/// A solution of no contacts, with no buffers: storage to be written into.
+impl Default for Solution {
+    fn default() -> Self {
+        Self {
+            modes: Vec::new(),
+            x: DVector::zeros(0),
+            w: DVector::zeros(0),
+        }
+    }
+}
+
 impl Solution {
     /// Opens every closed contact whose normal force came out negative, `x_n < 0`: the
     /// solvers accept a solution whose conditions hold to their tolerance, and a contact
@@ -154,8 +165,8 @@ pub fn solutions(
 /// [`solutions`] into `out`, whose solutions are replaced (their buffers kept in
 /// `solver` and written into by this call or a later one): the same solutions, to the
 /// bit, without allocating once the workspace has met the largest problem and the most
-/// solutions (the enumeration's; Lemke's own solution is a new one). On an error `out`
-/// is empty.
+/// solutions (the enumeration's and Lemke's: its solution is written into a spare one,
+/// its polish and repair work in the solver's buffers). On an error `out` is empty.
 pub fn solutions_into(
     solver: &mut Solver,
     a: &nalgebra::DMatrix<Real>,
@@ -171,21 +182,26 @@ pub fn solutions_into(
     } else {
         solver.enumeration.recycle(out);
     }
-    match solver.solve(a, b, allowed) {
-        Ok(s) => {
-            out.push(s);
+    let mut sol = solver.enumeration.spare();
+    match solver.solve_into(a, b, allowed, &mut sol) {
+        Ok(()) => {
+            out.push(sol);
             Ok(())
         }
-        // Lemke's path can end on a ray where a solution exists (a known slip), or its
-        // solution miss the conditions by rounding (ill-conditioned bases of redundant
-        // points): a few points more are checked by the enumeration before giving up.
-        Err(e @ (LcpError::NoSolution { .. } | LcpError::Inaccurate { .. }))
-            if (ENUMERATED_UP_TO + 1..=MAX_ENUMERATED).contains(&allowed.len()) =>
-        {
-            solver.enumeration.solve_into(a, b, allowed, out);
-            if out.is_empty() { Err(e) } else { Ok(()) }
+        Err(e) => {
+            solver.enumeration.keep(sol);
+            // Lemke's path can end on a ray where a solution exists (a known slip), or its
+            // solution miss the conditions by rounding (ill-conditioned bases of redundant
+            // points): a few points more are checked by the enumeration before giving up.
+            let missed = matches!(e, LcpError::NoSolution { .. } | LcpError::Inaccurate { .. });
+            if missed && (ENUMERATED_UP_TO + 1..=MAX_ENUMERATED).contains(&allowed.len()) {
+                solver.enumeration.solve_into(a, b, allowed, out);
+                if !out.is_empty() {
+                    return Ok(());
+                }
+            }
+            Err(e)
         }
-        Err(e) => Err(e),
     }
 }
 

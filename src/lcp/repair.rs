@@ -12,11 +12,13 @@
 //! is pressed (`w_n < 0`) closes and sticks, a closed one that pulls (`x_n < 0`) opens, a
 //! sticking one outside its cone slides against its friction, a sliding one whose slip
 //! would start against its direction (`s w_t < 0`) sticks. Not a solver with a
-//! guarantee: a start from Lemke's near-solution that settles in a few changes, or `None`.
+//! guarantee: a start from Lemke's near-solution that settles in a few changes, or gives up.
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{Allowed, Mode, Solution, conditions_violation, forces, friction::CHECK_TOL};
+use super::friction::{CHECK_TOL, violation_in};
+use super::{Allowed, Mode, ModeSystem, Solution};
+use crate::linalg::fit_vector;
 use crate::math::Real;
 
 /// The most mode changes tried: a few per point.
@@ -24,25 +26,123 @@ fn max_changes(n: usize) -> usize {
     4 * n + 8
 }
 
-/// The modes from `start` repaired until they meet their conditions to [`CHECK_TOL`],
-/// if that happens within a few changes per point.
-pub fn repair(
+/// The buffers of the repair and of the polish of Lemke's solutions
+/// ([`super::Solver`]), kept between calls: once they have met the largest problem,
+/// [`Workspace::repair`], [`Workspace::forces_into`] and [`Workspace::violation`]
+/// allocate nothing (the mode selections and the simultaneous impacts of many points call
+/// them at events).
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    /// The contacts' `μ` (n).
+    mu: Vec<Real>,
+    /// The modes being repaired: the start, then changed one point at a time (n).
+    modes: Vec<Mode>,
+    /// The linear system of the modes, its solve, forces `x` and `w`.
+    system: ModeSystem,
+    /// [`super::conditions_violation`]'s `w = A x + b`, recomputed (2n).
+    w: DVector<Real>,
+    /// Its difference from the solution's `w` (2n).
+    diff: DVector<Real>,
+}
+
+impl Workspace {
+    /// Starts the repair from `modes` (Lemke's).
+    pub fn start_from(&mut self, modes: &[Mode]) {
+        self.modes.clear();
+        self.modes.extend_from_slice(modes);
+    }
+
+    /// Starts the repair where Lemke's path gave no modes: each point closed if it is
+    /// pressed with no force (`b_n < 0`), open otherwise.
+    pub fn start_pressed(&mut self, b: &DVector<Real>, allowed: &[Allowed]) {
+        self.modes.clear();
+        self.modes.extend(allowed.iter().enumerate().map(|(i, c)| {
+            if b[2 * i] < 0.0 || !c.open {
+                c.slip.map_or(Mode::Stick, Mode::Slide)
+            } else {
+                Mode::Open
+            }
+        }));
+    }
+
+    /// The modes of the start repaired until they meet their conditions to
+    /// [`CHECK_TOL`], written into `out`, if that happens within a few changes per point:
+    /// `true`; else `false` (`out`'s numbers then mean nothing).
+    pub fn repair(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+        out: &mut Solution,
+    ) -> bool {
+        set_mu(&mut self.mu, allowed);
+        for _ in 0..max_changes(allowed.len()) {
+            if !forces_of(&mut self.system, a, b, &self.mu, &self.modes, out) {
+                return false;
+            }
+            if violation_in(a, b, allowed, out, &mut self.w, &mut self.diff) <= CHECK_TOL {
+                return true;
+            }
+            let Some((i, mode)) = worst_point(a, b, allowed, out) else {
+                return false;
+            };
+            self.modes[i] = mode;
+        }
+        false
+    }
+
+    /// [`super::forces`] of `modes` written into `out` (the same numbers, to the bit):
+    /// `false` if their system has no solution (`out`'s numbers then mean nothing).
+    pub fn forces_into(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+        modes: &[Mode],
+        out: &mut Solution,
+    ) -> bool {
+        set_mu(&mut self.mu, allowed);
+        forces_of(&mut self.system, a, b, &self.mu, modes, out)
+    }
+
+    /// [`super::conditions_violation`] of `sol`, in the kept buffers (the same number).
+    pub fn violation(
+        &mut self,
+        a: &DMatrix<Real>,
+        b: &DVector<Real>,
+        allowed: &[Allowed],
+        sol: &Solution,
+    ) -> Real {
+        violation_in(a, b, allowed, sol, &mut self.w, &mut self.diff)
+    }
+}
+
+/// `mu` the contacts' `μ`.
+fn set_mu(mu: &mut Vec<Real>, allowed: &[Allowed]) {
+    mu.clear();
+    mu.extend(allowed.iter().map(|c| c.mu));
+}
+
+/// [`super::forces`] by `system`, copied into `out`; `false` if the modes' system has no
+/// solution.
+fn forces_of(
+    system: &mut ModeSystem,
     a: &DMatrix<Real>,
     b: &DVector<Real>,
-    allowed: &[Allowed],
-    start: &[Mode],
-) -> Option<Solution> {
-    let mu: Vec<Real> = allowed.iter().map(|c| c.mu).collect();
-    let mut modes = start.to_vec();
-    for _ in 0..max_changes(allowed.len()) {
-        let sol = forces(a, b, &mu, &modes)?;
-        if conditions_violation(a, b, allowed, &sol) <= CHECK_TOL {
-            return Some(sol);
-        }
-        let (i, mode) = worst_point(a, b, allowed, &sol)?;
-        modes[i] = mode;
-    }
-    None
+    mu: &[Real],
+    modes: &[Mode],
+    out: &mut Solution,
+) -> bool {
+    let Some((x, w)) = system.forces(a, b, mu, modes) else {
+        return false;
+    };
+    out.modes.clear();
+    out.modes.extend_from_slice(modes);
+    fit_vector(&mut out.x, x.len());
+    out.x.copy_from(x);
+    fit_vector(&mut out.w, w.len());
+    out.w.copy_from(w);
+    true
 }
 
 /// The point whose condition is most violated, and the mode that condition asks for.
@@ -87,24 +187,10 @@ fn worst_point(
     worst.map(|w| (w.1, w.2))
 }
 
-/// A start for [`repair`] where Lemke's path gave none: each point closed if it is pressed
-/// with no force (`b_n < 0`), open otherwise.
-pub fn start(b: &DVector<Real>, allowed: &[Allowed]) -> Vec<Mode> {
-    (allowed.iter().enumerate())
-        .map(|(i, c)| {
-            if b[2 * i] < 0.0 || !c.open {
-                c.slip.map_or(Mode::Stick, Mode::Slide)
-            } else {
-                Mode::Open
-            }
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lcp::solve;
+    use crate::lcp::{conditions_violation, solve};
 
     /// A deterministic pseudo-random sequence in [−1, 1) (a 64-bit LCG).
     struct Lcg(u64);
@@ -127,6 +213,8 @@ mod tests {
     fn a_wrong_mode_is_repaired_to_a_solution_of_the_enumeration() {
         let mut rng = Lcg(5);
         let (mut starts, mut repaired) = (0, 0);
+        // One workspace for every repair: its buffers reused across sizes.
+        let (mut ws, mut r) = (Workspace::default(), Solution::default());
         for k in 0..300 {
             let n = 2 + k % 3;
             let j = DMatrix::from_fn(2 * n, 3, |_, _| rng.next());
@@ -150,9 +238,10 @@ mod tests {
                         let mut start = sol.modes.clone();
                         start[i] = to;
                         starts += 1;
-                        let Some(r) = repair(&a, &b, &allowed, &start) else {
+                        ws.start_from(&start);
+                        if !ws.repair(&a, &b, &allowed, &mut r) {
                             continue;
-                        };
+                        }
                         repaired += 1;
                         assert!(conditions_violation(&a, &b, &allowed, &r) <= CHECK_TOL);
                         assert!(

@@ -1,10 +1,12 @@
 //! Lemke's workspace allocates nothing once warmed up: a counting global allocator (per
-//! thread) watches `Lemke::solve` on a problem no larger than one it has solved.
+//! thread) watches `Lemke::solve` on a problem no larger than one it has solved, and the
+//! contact problem's whole Lemke path (`lcp::solutions_into` on many points).
 
 use crate::common::alloc::allocations;
 
 use nalgebra::{DMatrix, DVector};
 use ricochet::lcp::lemke::{Lemke, LemkeStatus};
+use ricochet::lcp::{self, Allowed, Solution, Solver};
 
 #[test]
 fn a_warm_lemke_workspace_allocates_nothing() {
@@ -42,4 +44,78 @@ fn a_warm_lemke_workspace_allocates_nothing() {
         "Lemke allocated {} times once warm",
         after - before
     );
+}
+
+/// A problem dumped by the simulation (`tests/data/lcp/`: `DUMP A=[…]` column-major,
+/// `DUMP b=[…]`, `DUMP mu=[…]`), every slip unknown.
+fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
+    let list = |key: &str| -> Vec<f64> {
+        let line = text.lines().find_map(|l| l.strip_prefix(key)).unwrap();
+        let inner = line.trim().trim_start_matches('[').trim_end_matches(']');
+        inner
+            .split(',')
+            .map(|v| v.trim().parse().unwrap())
+            .collect()
+    };
+    let (a, b, mu) = (list("DUMP A="), list("DUMP b="), list("DUMP mu="));
+    let n = mu.len();
+    let allowed = (mu.iter())
+        .map(|&mu| Allowed {
+            mu,
+            open: true,
+            slip: None,
+        })
+        .collect();
+    (
+        DMatrix::from_column_slice(2 * n, 2 * n, &a),
+        DVector::from_vec(b),
+        allowed,
+    )
+}
+
+/// Lemke's path of the contact problem (`lcp::solutions_into` beyond the enumeration:
+/// the LCP's assembly, Lemke's pivots along `d = 1` and the other covering vectors, the
+/// solution's modes, its polish and the repair of its modes) allocates nothing once its
+/// buffers have grown: the problems the chains on the floor posed (6 to 29 points, the
+/// 29 solved along the second covering vector), each solved three times on one solver,
+/// in turn, with `out` holding the last call's solutions; the third round allocates
+/// nothing (on stop 34's code: 39 a round), and every call gives a fresh solver's
+/// solution, bit for bit.
+#[test]
+fn a_warm_lemke_path_allocates_nothing() {
+    let problems: Vec<_> = [
+        include_str!("../data/lcp/chain32_6_contacts.txt"),
+        include_str!("../data/lcp/chain32_8_contacts.txt"),
+        include_str!("../data/lcp/chain16_11_contacts.txt"),
+        include_str!("../data/lcp/chain32_28_contacts.txt"),
+        include_str!("../data/lcp/chain32_29_contacts_pivots.txt"),
+    ]
+    .into_iter()
+    .map(dumped)
+    .collect();
+    let fresh: Vec<Solution> = (problems.iter())
+        .map(|(a, b, allowed)| Solver::new().solve(a, b, allowed).unwrap())
+        .collect();
+    let bits = |s: &Solution| {
+        let v = |v: &DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        (s.modes.clone(), v(&s.x), v(&s.w))
+    };
+    let (mut solver, mut out) = (Solver::new(), Vec::new());
+    for round in 0..3 {
+        let before = allocations();
+        for (a, b, allowed) in &problems {
+            lcp::solutions_into(&mut solver, a, b, allowed, &mut out).unwrap();
+        }
+        let allocated = allocations() - before;
+        println!("round {round}: {allocated} allocations");
+        if round == 2 {
+            assert_eq!(allocated, 0, "Lemke's path allocated once warm");
+        }
+        // The last problem's solution, and every other's again, are a fresh solver's.
+        for ((a, b, allowed), fresh) in problems.iter().zip(&fresh) {
+            lcp::solutions_into(&mut solver, a, b, allowed, &mut out).unwrap();
+            assert_eq!(out.len(), 1);
+            assert!(bits(&out[0]) == bits(fresh), "round {round}");
+        }
+    }
 }
