@@ -325,7 +325,7 @@ fn rocking_ends_allocate_nothing() {
 /// packing buffer at every call. The bound is to become 0 when that product works in kept
 /// storage.
 #[test]
-fn lemke_s_path_allocates_nothing() {
+fn lemke_s_path_allocates_nothing_beyond_the_w_product() {
     let at_least = Callbacks {
         impacts: 80,
         transitions: 10,
