@@ -397,13 +397,6 @@ impl<'m> Simulation<'m> {
     /// Forgets what an earlier run left: every run starts as on a new simulation (the
     /// same results bit for bit, `tests/all/sim_alloc.rs`), with the buffers it kept.
     fn reset(&mut self) {
-        /// Every stored pair back at `value`, its storage kept.
-        fn reset_pairs<T: Clone>(map: &mut PairMap<T>, value: T) {
-            let pairs: Vec<PairId> = map.stored().collect();
-            for pair in pairs {
-                map[pair.index()] = value.clone();
-            }
-        }
         if self.stepper.counters() == Default::default() {
             // A new simulation: nothing to forget.
             return;
@@ -413,11 +406,11 @@ impl<'m> Simulation<'m> {
         self.gaps.candidates.clear();
         self.gaps.disarmed.clear();
         self.stepper.set_h_max(self.h_max);
-        reset_pairs(&mut self.disarmed, None);
-        reset_pairs(&mut self.modes, PairMode::Free);
-        reset_pairs(&mut self.slips, 0);
-        reset_pairs(&mut self.last_separation, None);
-        reset_pairs(&mut self.accumulating, None);
+        self.disarmed.reset_stored(&None);
+        self.modes.reset_stored(&PairMode::Free);
+        self.slips.reset_stored(&0);
+        self.last_separation.reset_stored(&None);
+        self.accumulating.reset_stored(&None);
         self.unresolved = (Real::NAN, 0.0);
         self.passages.clear();
         self.indeterminate = (Real::NEG_INFINITY, 0);

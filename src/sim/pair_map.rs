@@ -30,6 +30,15 @@ impl<T: Clone> PairMap<T> {
         self.default = value;
     }
 
+    /// Every stored pair back at `value`, the pairs kept stored: unlike [`PairMap::fill`],
+    /// the map keeps its nodes, so that writing those pairs again allocates nothing
+    /// (`Simulation::reset`).
+    pub fn reset_stored(&mut self, value: &T) {
+        for v in self.map.values_mut() {
+            v.clone_from(value);
+        }
+    }
+
     /// The pairs stored (written since the last fill or prune), in pair order.
     pub fn stored(&self) -> impl Iterator<Item = PairId> + '_ {
         self.map.keys().map(|&k| PairId(k))
