@@ -243,17 +243,24 @@ pub(crate) fn product_into(a: &DMatrix<Real>, b: &DMatrix<Real>, out: &mut DMatr
                 }
             }
         } else {
-            for (i, s) in c_j.iter_mut().enumerate() {
-                let mut total = 0.0;
-                for (block, b_block) in b_j.chunks(GEMM_DEPTH).enumerate() {
-                    let r0 = block * GEMM_DEPTH;
-                    let mut acc: Real = 0.0;
-                    for (r, &b_rj) in (r0..).zip(b_block) {
-                        acc = a[r * n + i].mul_add(b_rj, acc);
-                    }
-                    total = acc + total;
+            // The first block summed in place from +0, then added to +0 (−0 becomes +0).
+            c_j.fill(0.0);
+            for (a_r, &b_rj) in a.chunks_exact(n).zip(&b_j[..m.min(GEMM_DEPTH)]) {
+                for (s, &a_ir) in c_j.iter_mut().zip(a_r) {
+                    *s = a_ir.mul_add(b_rj, *s);
                 }
-                *s = total;
+            }
+            for s in c_j.iter_mut() {
+                *s += 0.0;
+            }
+            // Each further block (a depth past GEMM_DEPTH) summed from +0, then added.
+            for (block, b_block) in b_j.chunks(GEMM_DEPTH).enumerate().skip(1) {
+                let a_block = &a[block * GEMM_DEPTH * n..];
+                for (i, s) in c_j.iter_mut().enumerate() {
+                    let terms = a_block.chunks_exact(n).zip(b_block);
+                    let acc = terms.fold(0.0, |acc: Real, (a_r, &b_rj)| a_r[i].mul_add(b_rj, acc));
+                    *s = acc + *s;
+                }
             }
         }
     }
