@@ -214,13 +214,14 @@ const GEMM_DEPTH: usize = 256;
 /// `r` in increasing order, `s = a_i0 b_0j`, then `s = a_ir b_rj + s` (a rounded product,
 /// then a rounded sum: Rust never fuses them); so does this. Beyond, nalgebra hands it to
 /// `matrixmultiply`, which allocates a packing buffer at every call and picks its kernel
-/// from the processor at run time: with fused multiply–adds (x86-64 with FMA or
-/// AVX-512, aarch64) each entry is `fma(a_ir, b_rj, s)` over `r` from `s = +0` in blocks of
+/// from the processor at run time: with fused multiply–adds (x86-64 with FMA, as this
+/// machine, whose product the test checks to the bit; its AVX-512 and aarch64 kernels
+/// fuse too) each entry is `fma(a_ir, b_rj, s)` over `r` from `s = +0` in blocks of
 /// [`GEMM_DEPTH`], the blocks' sums added in turn (the first to `+0`); without them
 /// (older x86-64) a rounded product and sum, and the bits of the product — and of what
 /// follows it — depended on the machine. Here they are the fused ones everywhere:
-/// `mul_add` is the exactly rounded `a b + s` on every target (the instruction, or
-/// the C library's `fma`).
+/// `mul_add` is the exactly rounded `a b + s` on every target (a call to the runtime's
+/// `fma`, which uses the instruction where the processor has it).
 pub(crate) fn product_into(a: &DMatrix<Real>, b: &DMatrix<Real>, out: &mut DMatrix<Real>) {
     let ((n, m), p) = (a.shape(), b.ncols());
     debug_assert_eq!(b.nrows(), m, "product_into: shapes");
@@ -239,7 +240,7 @@ pub(crate) fn product_into(a: &DMatrix<Real>, b: &DMatrix<Real>, out: &mut DMatr
             }
             for (a_r, &b_rj) in a.chunks_exact(n).zip(b_j).skip(1) {
                 for (s, &a_ir) in c_j.iter_mut().zip(a_r) {
-                    *s = a_ir * b_rj + *s;
+                    *s += a_ir * b_rj; // `a_ir b_rj + s`: addition commutes
                 }
             }
         } else {
@@ -259,7 +260,7 @@ pub(crate) fn product_into(a: &DMatrix<Real>, b: &DMatrix<Real>, out: &mut DMatr
                 for (i, s) in c_j.iter_mut().enumerate() {
                     let terms = a_block.chunks_exact(n).zip(b_block);
                     let acc = terms.fold(0.0, |acc: Real, (a_r, &b_rj)| a_r[i].mul_add(b_rj, acc));
-                    *s = acc + *s;
+                    *s += acc;
                 }
             }
         }
@@ -831,7 +832,7 @@ pub(crate) mod tests {
             .chain([(4, 32, 90), (90, 32, 4), (1, 1, 1)]);
         let mut cases = 0;
         for (n, m, p) in sizes {
-            let scale = 10f64.powi((cases % 5) as i32 - 2);
+            let scale = 10f64.powi(cases % 5 - 2);
             let mut entry = || match rng.unit() {
                 x if x < 0.05 => -0.0,
                 _ => rng.next() * scale,
