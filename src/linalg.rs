@@ -198,6 +198,75 @@ pub(crate) fn dot(a: &[Real], b: &[Real]) -> Real {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+/// nalgebra's `gemm` hands a product of dynamic matrices to `matrixmultiply` when its sizes
+/// all pass this (nalgebra 0.35, `blas_uninit::gemm_uninit`).
+const GEMM_SMALL_DIM: usize = 5;
+
+/// `matrixmultiply`'s depth of a block of `f64` (`D_KC`, 0.3): the sums over `r` are made
+/// in blocks of this many terms.
+const GEMM_DEPTH: usize = 256;
+
+/// `out = a b` (`a` n × m, `b` m × p) in `out`'s kept storage (given the shape n × p by
+/// [`fit_matrix`]): nalgebra's `a.mul_to(b, out)` to the bit as it computes it on a
+/// processor with fused multiply–adds, on every machine and without allocating.
+///
+/// nalgebra's product of such sizes that one of n, m, p is at most 5 sums each entry over
+/// `r` in increasing order, `s = a_i0 b_0j`, then `s = a_ir b_rj + s` (a rounded product,
+/// then a rounded sum: Rust never fuses them); so does this. Beyond, nalgebra hands it to
+/// `matrixmultiply`, which allocates a packing buffer at every call and picks its kernel
+/// from the processor at run time: with fused multiply–adds (x86-64 with FMA, as this
+/// machine, whose product the test checks to the bit; its AVX-512 and aarch64 kernels
+/// fuse too) each entry is `fma(a_ir, b_rj, s)` over `r` from `s = +0` in blocks of
+/// [`GEMM_DEPTH`], the blocks' sums added in turn (the first to `+0`); without them
+/// (older x86-64) a rounded product and sum, and the bits of the product — and of what
+/// follows it — depended on the machine. Here they are the fused ones everywhere:
+/// `mul_add` is the exactly rounded `a b + s` on every target (a call to the runtime's
+/// `fma`, which uses the instruction where the processor has it).
+pub(crate) fn product_into(a: &DMatrix<Real>, b: &DMatrix<Real>, out: &mut DMatrix<Real>) {
+    let ((n, m), p) = (a.shape(), b.ncols());
+    debug_assert_eq!(b.nrows(), m, "product_into: shapes");
+    fit_matrix(out, n, p);
+    let (a, b, c) = (a.as_slice(), b.as_slice(), out.as_mut_slice());
+    if m == 0 || n == 0 {
+        c.fill(0.0);
+        return;
+    }
+    let fused = n > GEMM_SMALL_DIM && p > GEMM_SMALL_DIM && m > GEMM_SMALL_DIM;
+    for (b_j, c_j) in b.chunks_exact(m).zip(c.chunks_exact_mut(n)) {
+        if !fused {
+            // Column j: a's columns (contiguous) times b_rj, r increasing.
+            for (s, &a_i0) in c_j.iter_mut().zip(&a[..n]) {
+                *s = a_i0 * b_j[0];
+            }
+            for (a_r, &b_rj) in a.chunks_exact(n).zip(b_j).skip(1) {
+                for (s, &a_ir) in c_j.iter_mut().zip(a_r) {
+                    *s += a_ir * b_rj; // `a_ir b_rj + s`: addition commutes
+                }
+            }
+        } else {
+            // The first block summed in place from +0, then added to +0 (−0 becomes +0).
+            c_j.fill(0.0);
+            for (a_r, &b_rj) in a.chunks_exact(n).zip(&b_j[..m.min(GEMM_DEPTH)]) {
+                for (s, &a_ir) in c_j.iter_mut().zip(a_r) {
+                    *s = a_ir.mul_add(b_rj, *s);
+                }
+            }
+            for s in c_j.iter_mut() {
+                *s += 0.0;
+            }
+            // Each further block (a depth past GEMM_DEPTH) summed from +0, then added.
+            for (block, b_block) in b_j.chunks(GEMM_DEPTH).enumerate().skip(1) {
+                let a_block = &a[block * GEMM_DEPTH * n..];
+                for (i, s) in c_j.iter_mut().enumerate() {
+                    let terms = a_block.chunks_exact(n).zip(b_block);
+                    let acc = terms.fold(0.0, |acc: Real, (a_r, &b_rj)| a_r[i].mul_add(b_rj, acc));
+                    *s += acc;
+                }
+            }
+        }
+    }
+}
+
 /// Applies the reflection `H = I − β v vᵀ` of column `k` of `m` (`v = (v₀, m[k+1.., k])`)
 /// to rows `k..` of column `j > k` of `m`.
 fn reflect_column(m: &mut DMatrix<Real>, k: usize, (v0, beta): (Real, Real), j: usize) {
@@ -732,5 +801,70 @@ pub(crate) mod tests {
             assert_eq!(x.len(), n);
             assert!((&a * &x - &b).amax() <= 1e-12, "{m}×{n}");
         }
+    }
+
+    /// [`product_into`] on random `a` (n × m) and `b` (m × p) of every size up to 9 and a
+    /// few of the 32-link chain's (W of up to 45 points: 90 × 32 times 32 × 90; and depths
+    /// past a block of [`GEMM_DEPTH`]), signed zeros among the entries, one `out` for all in
+    /// turn: each entry is the triple loop's sum to the bit — a rounded product and sum
+    /// when a size is at most 5, fused multiply–adds in blocks beyond — and where the
+    /// processor has fused multiply–adds (as this machine, whose logs are the reference)
+    /// nalgebra's own product to the bit.
+    #[test]
+    fn product_into_is_the_triple_loop_and_nalgebra_s_product_to_the_bit() {
+        #[cfg(target_arch = "x86_64")]
+        let fused_here = std::arch::is_x86_feature_detected!("fma");
+        #[cfg(target_arch = "aarch64")]
+        let fused_here = true;
+        #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+        let fused_here = false;
+        let mut rng = Lcg(21);
+        let mut out = DMatrix::zeros(0, 0);
+        let sizes = (0..=9)
+            .flat_map(|n| (0..=9).flat_map(move |m| [(n, m, n), (n, m, 9 - n)]))
+            .chain([
+                (90, 32, 90),
+                (12, 32, 12),
+                (6, 6, 6),
+                (6, 300, 7),
+                (8, 520, 6),
+            ])
+            .chain([(4, 32, 90), (90, 32, 4), (1, 1, 1)]);
+        let mut cases = 0;
+        for (n, m, p) in sizes {
+            let scale = 10f64.powi(cases % 5 - 2);
+            let mut entry = || match rng.unit() {
+                x if x < 0.05 => -0.0,
+                _ => rng.next() * scale,
+            };
+            let a = DMatrix::from_fn(n, m, |_, _| entry());
+            let b = DMatrix::from_fn(m, p, |_, _| entry());
+            product_into(&a, &b, &mut out);
+            assert_eq!(out.shape(), (n, p));
+            let fused = n > 5 && m > 5 && p > 5;
+            for j in 0..p {
+                for i in 0..n {
+                    let sum = match m {
+                        0 => 0.0,
+                        _ if fused => (0..m).step_by(GEMM_DEPTH).fold(0.0, |total, r0| {
+                            let r1 = (r0 + GEMM_DEPTH).min(m);
+                            let block =
+                                (r0..r1).fold(0.0, |s: Real, r| a[(i, r)].mul_add(b[(r, j)], s));
+                            block + total
+                        }),
+                        _ => (1..m).fold(a[(i, 0)] * b[(0, j)], |s, r| a[(i, r)] * b[(r, j)] + s),
+                    };
+                    let at = format!("{n}×{m} × {m}×{p} ({i}, {j})");
+                    assert_eq!(out[(i, j)].to_bits(), sum.to_bits(), "{at}");
+                }
+            }
+            if fused_here || !fused {
+                let nalgebra = &a * &b;
+                let bits = |m: &DMatrix<Real>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&out), bits(&nalgebra), "{n}×{m} × {m}×{p}");
+            }
+            cases += 1;
+        }
+        assert_eq!(cases, 200 + 8);
     }
 }

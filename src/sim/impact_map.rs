@@ -13,7 +13,7 @@ use crate::impact::{
 };
 use crate::kinematics::{update_positions, update_velocities};
 use crate::lcp::{self, Allowed, Mode};
-use crate::linalg::{MinNorm, fit_matrix, fit_vector};
+use crate::linalg::{MinNorm, fit_matrix, fit_vector, product_into};
 use crate::math::Real;
 use crate::model::{Material, Model, PairId};
 use crate::state::Data;
@@ -753,9 +753,9 @@ impl ImpactMap {
             solve_mass(&mut self.data, column).map_err(|e| SimError::at(t, e))?;
             set.minv_jt.column_mut(col).copy_from_slice(column);
         }
-        // W = J M⁻¹ Jᵀ (`mul_to` is the product's own `gemm`: the same numbers).
-        fit_matrix(&mut set.w, 2 * k, 2 * k);
-        set.jac.mul_to(&set.minv_jt, &mut set.w);
+        // W = J M⁻¹ Jᵀ: nalgebra's product to the bit (fused multiply–adds from 6 × 6 on),
+        // without `matrixmultiply`'s packing buffer and its choice of kernel at run time.
+        product_into(&set.jac, &set.minv_jt, &mut set.w);
         Ok(())
     }
 

@@ -213,13 +213,6 @@ fn record(sim: &mut Simulation<'_>, initial: &ricochet::state::State) -> (Record
 /// the two rounds of a rocking end — are handed out in an order that need not be the
 /// first run's, so one may still grow in the second run; by the third each has.)
 fn assert_events_allocate_nothing(path: &str, t_end: f64, at_least: Callbacks) {
-    let allocated = events_allocations(path, t_end, at_least);
-    assert_eq!(allocated, 0, "{path}");
-}
-
-/// The allocations of the third run of [`assert_events_allocate_nothing`] (the other
-/// checks made).
-fn events_allocations(path: &str, t_end: f64, at_least: Callbacks) -> usize {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
     let mut scene = ricochet::scene::load(&path).unwrap();
     scene.settings.t_end = t_end;
@@ -264,7 +257,7 @@ fn events_allocations(path: &str, t_end: f64, at_least: Callbacks) -> usize {
         "{}: fewer events than expected: {calls:?}",
         path.display()
     );
-    allocated
+    assert_eq!(allocated, 0, "{}: {calls:?}", path.display());
 }
 
 /// Kane's double pendulum to 5 s: 11 impacts, the end of their accumulation (0.19 s), the
@@ -317,20 +310,16 @@ fn rocking_ends_allocate_nothing() {
 /// pivots, its solution's modes, their polish and repair): the 32-link chain on the floor
 /// to 0.5 s, its first whip against the floor — simultaneous impacts of 6 and 8 points and
 /// mode selections of 5 to 8 (23 calls of Lemke's solver per run), among impacts and mode
-/// selections of fewer points. On stop 34's code the third run allocated 150 times.
-///
-/// What it still allocates is not Lemke's: the product `W = J M⁻¹ Jᵀ` of a simultaneous
-/// impact of three points or more (`ImpactMap::assemble`, 28 per run here): nalgebra's
-/// `gemm` hands products whose sizes all pass 5 to `matrixmultiply`, which allocates its
-/// packing buffer at every call. The bound is to become 0 when that product works in kept
-/// storage.
+/// selections of fewer points. On stop 34's code the third run allocated 150 times; 28
+/// once Lemke's path was done: the packing buffers of `matrixmultiply`, to which
+/// nalgebra's product handed `W = J M⁻¹ Jᵀ` of three points or more, now
+/// `linalg::product_into` (the same bits) in kept storage.
 #[test]
-fn lemke_s_path_allocates_nothing_beyond_the_w_product() {
+fn lemke_s_path_allocates_nothing() {
     let at_least = Callbacks {
         impacts: 80,
         transitions: 10,
         ..Callbacks::default()
     };
-    let allocated = events_allocations("scenes/chain_floor.toml", 0.5, at_least);
-    assert!(allocated <= 28, "{allocated} allocations");
+    assert_events_allocate_nothing("scenes/chain_floor.toml", 0.5, at_least);
 }
