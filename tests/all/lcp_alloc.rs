@@ -3,10 +3,11 @@
 //! contact problem's whole Lemke path (`lcp::solutions_into` on many points).
 
 use crate::common::alloc::allocations;
+use crate::lcp_lemke::dumped;
 
 use nalgebra::{DMatrix, DVector};
 use ricochet::lcp::lemke::{Lemke, LemkeStatus};
-use ricochet::lcp::{self, Allowed, Solution, Solver};
+use ricochet::lcp::{self, Solution, Solver};
 
 #[test]
 fn a_warm_lemke_workspace_allocates_nothing() {
@@ -44,33 +45,6 @@ fn a_warm_lemke_workspace_allocates_nothing() {
         "Lemke allocated {} times once warm",
         after - before
     );
-}
-
-/// A problem dumped by the simulation (`tests/data/lcp/`: `DUMP A=[…]` column-major,
-/// `DUMP b=[…]`, `DUMP mu=[…]`), every slip unknown.
-fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
-    let list = |key: &str| -> Vec<f64> {
-        let line = text.lines().find_map(|l| l.strip_prefix(key)).unwrap();
-        let inner = line.trim().trim_start_matches('[').trim_end_matches(']');
-        inner
-            .split(',')
-            .map(|v| v.trim().parse().unwrap())
-            .collect()
-    };
-    let (a, b, mu) = (list("DUMP A="), list("DUMP b="), list("DUMP mu="));
-    let n = mu.len();
-    let allowed = (mu.iter())
-        .map(|&mu| Allowed {
-            mu,
-            open: true,
-            slip: None,
-        })
-        .collect();
-    (
-        DMatrix::from_column_slice(2 * n, 2 * n, &a),
-        DVector::from_vec(b),
-        allowed,
-    )
 }
 
 /// Lemke's path of the contact problem (`lcp::solutions_into` beyond the enumeration:

@@ -467,7 +467,7 @@ fn bad_input_gets_typed_errors() {
 
 /// A problem dumped by the simulation (`DUMP A=[…]` column-major, `DUMP b=[…]`,
 /// `DUMP mu=[…]`), every slip unknown, as the simultaneous impact poses it.
-fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
+pub(crate) fn dumped(text: &str) -> (DMatrix<f64>, DVector<f64>, Vec<Allowed>) {
     let list = |key: &str| -> Vec<f64> {
         let line = text
             .lines()
