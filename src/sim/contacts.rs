@@ -744,19 +744,14 @@ impl Simulation<'_> {
         if slow.is_empty() {
             return Ok(());
         }
-        let sel = self.with_scratch(
-            |s| &mut s.candidates,
-            |sim, points| {
-                points.clear();
-                points.extend(slow.iter().map(|p| Candidate {
-                    pair: p.pair,
-                    local: p.local,
-                    mu: 0.0,
-                    slip: None,
-                }));
-                sim.select_at(t, y, points, Real::INFINITY)
-            },
-        )?;
+        let sel = self.select_filled(t, y, Real::INFINITY, |_, points| {
+            points.extend(slow.iter().map(|p| Candidate {
+                pair: p.pair,
+                local: p.local,
+                mu: 0.0,
+                slip: None,
+            }));
+        })?;
         let mut free = sel.free.iter();
         slow.retain(|p| {
             free.next()
@@ -949,19 +944,15 @@ impl Simulation<'_> {
             .filter(|ev| ev.v_a.n > 0.0)
             .map(|ev| ev.v_a.n)
             .fold(0.0, Real::max);
-        let sel = self.with_scratch(
-            |s| &mut s.candidates,
-            |sim, candidates| {
-                candidates.clear();
-                candidates.extend(held.iter().map(|p| Candidate {
-                    pair: p.pair,
-                    local: p.local,
-                    mu: sim.material(p.pair).mu,
-                    slip: None,
-                }));
-                sim.select_at(t, y, candidates, 1e3 * sim.scales.v_tiny)
-            },
-        )?;
+        let v_slip = 1e3 * self.scales.v_tiny;
+        let sel = self.select_filled(t, y, v_slip, |sim, candidates| {
+            candidates.extend(held.iter().map(|p| Candidate {
+                pair: p.pair,
+                local: p.local,
+                mu: sim.material(p.pair).mu,
+                slip: None,
+            }));
+        })?;
         let Some(chosen) = most_open_first(&sel.solutions) else {
             return Err(SimError::Contact {
                 t,
@@ -1032,6 +1023,25 @@ impl Simulation<'_> {
             self.last_separation[k] = None;
         }
         self.scratch.accumulations = pairs;
+    }
+
+    /// [`Self::select_at`] of the candidates that `fill` writes into the kept candidate
+    /// list (emptied first).
+    fn select_filled(
+        &mut self,
+        t: Real,
+        y: &[Real],
+        v_slip: Real,
+        fill: impl FnOnce(&Self, &mut Vec<Candidate>),
+    ) -> Result<Selection, SimError> {
+        self.with_scratch(
+            |s| &mut s.candidates,
+            |sim, candidates| {
+                candidates.clear();
+                fill(sim, candidates);
+                sim.select_at(t, y, candidates, v_slip)
+            },
+        )
     }
 
     /// The mode selection of `candidates` at `(t, y)` ([`Persistent::select`] on the
@@ -1245,21 +1255,16 @@ impl Simulation<'_> {
             }
         }
         let v_slip = 1e3 * self.scales.v_tiny;
-        let mut sel = self.with_scratch(
-            |s| &mut s.candidates,
-            |sim, candidates| {
-                candidates.clear();
-                candidates.extend(
-                    (resting.iter().zip(slips.iter())).map(|(p, slip)| Candidate {
-                        pair: p.pair,
-                        local: p.local,
-                        mu: sim.material(p.pair).mu,
-                        slip: *slip,
-                    }),
-                );
-                sim.select_at(t, y, candidates, v_slip)
-            },
-        )?;
+        let mut sel = self.select_filled(t, y, v_slip, |sim, candidates| {
+            candidates.extend(
+                (resting.iter().zip(slips.iter())).map(|(p, slip)| Candidate {
+                    pair: p.pair,
+                    local: p.local,
+                    mu: sim.material(p.pair).mu,
+                    slip: *slip,
+                }),
+            );
+        })?;
         // A point that starts to slip from rest must slip the way its acceleration goes:
         // a solution that slows it down (s ẇ_t < 0 beyond rounding) is no start of a slip —
         // its slip would stop at once, and the selection would take it again (the 8-link
