@@ -30,6 +30,7 @@ use crate::articulated::ArticulatedFactor;
 use crate::kinematics::{
     KinematicsError, check_len, move_joint, place_joint, update_positions, update_velocities,
 };
+use crate::linalg::product_into;
 use crate::math::{Pose, Real, Vec2};
 use crate::model::spatial::{Inertia, Twist, Wrench};
 use crate::model::{Body, Joint, JointId, JointKind, Model};
@@ -595,7 +596,10 @@ pub fn mass_matrix(model: &Model, data: &mut Data) {
             mass_tree[(r, c)] = m;
             mass_tree[(c, r)] = m;
         });
-        data.mass_map.gemm(1.0, &mass_tree, &data.speed_map, 0.0);
+        // M_v S in kept storage, with the same bits on every machine (nalgebra's `gemm`
+        // hands a product of more than 5 speeds to `matrixmultiply`, which allocates and
+        // picks its kernel from the processor: `linalg::product_into`).
+        product_into(&mass_tree, &data.speed_map, &mut data.mass_map);
         data.mass_dense
             .gemm_tr(1.0, &data.speed_map, &data.mass_map, 0.0);
         // Exactly symmetric: the lower triangle is stored.

@@ -765,3 +765,73 @@ at = [0.3, 0.0]
         assert!((u[0] - v).abs() < 1e-12, "v at {t}");
     }
 }
+
+/// Three Chaplygin sleighs side by side: nine coordinates, three blades, six speeds.
+fn three_sleighs() -> Scene {
+    let mut text = String::from(
+        "version = 1\nname = \"three_sleighs\"\ngravity = [0.0, 0.0]\n[run]\nt_end = 1.0\n",
+    );
+    for (k, (x, angle, blade)) in [(-1.0, 5.0, -0.3), (0.0, -40.0, 0.1), (1.5, 120.0, 0.25)]
+        .into_iter()
+        .enumerate()
+    {
+        text.push_str(&format!(
+            "[[body]]\nname = \"sleigh{k}\"\nmass = {m}\ninertia = 0.13\n\
+             joint = {{ type = \"planar\", x = {x}, y = 0.2, angle = \"{angle} deg\", vx_body = 1.0, rate = \"2 rad/s\" }}\n\
+             [[body.constraint]]\ntype = \"knife_edge\"\nname = \"blade{k}\"\nat = [{blade}, 0.05]\ndirection = \"{d} deg\"\n",
+            m = 2.0 + k as f64,
+            d = 10.0 * k as f64,
+        ));
+    }
+    ricochet::scene::load_str(&text, "three_sleighs.toml").unwrap()
+}
+
+/// `M = Sᵀ M_v S` (Kane's generalized inertia forces in the speeds) of more than five
+/// speeds: nalgebra's `gemm` hands `M_v S` to `matrixmultiply`, which allocates a packing
+/// buffer at every call and picks its kernel (fused or not) from the processor. It is
+/// now `linalg::product_into`: no allocation once the workspace exists, and every entry
+/// of `M_v S` the fused sum over the coordinates, `fma(m_ik, s_kj, ·)` from +0 in
+/// increasing k, on every machine. The oracle is that sum written out here, and
+/// `Sᵀ (M_v S)` by dot products as nalgebra's `gemm_tr` takes them.
+#[test]
+fn the_mass_matrix_of_six_speeds_is_the_fused_product_and_allocates_nothing() {
+    use crate::common::alloc::allocations;
+    let scene = three_sleighs();
+    let model = &scene.model;
+    assert_eq!((model.nq(), model.nu()), (9, 6));
+    let mut data = Data::new(model);
+    let q: Vec<Real> = scene.initial.q.iter().copied().collect();
+    update_positions(model, &mut data, 0.0, &q).unwrap();
+    mass_matrix(model, &mut data);
+
+    for k in 0..5 {
+        let q: Vec<Real> = (q.iter().enumerate())
+            .map(|(i, x)| x + 0.1 * (k * 9 + i) as Real)
+            .collect();
+        let before = allocations();
+        update_positions(model, &mut data, 0.0, &q).unwrap();
+        mass_matrix(model, &mut data);
+        assert_eq!(allocations(), before, "allocations at round {k}");
+
+        let (mv, s) = (&data.mass_tree, &data.speed_map);
+        let (n, p) = (s.nrows(), s.ncols());
+        let mut mv_s = DMatrix::zeros(n, p);
+        for i in 0..n {
+            for j in 0..p {
+                let sum = (0..n).fold(0.0, |acc: Real, k| mv[(i, k)].mul_add(s[(k, j)], acc));
+                mv_s[(i, j)] = sum + 0.0;
+            }
+        }
+        assert_eq!(data.mass_map, mv_s, "M_v S at round {k}");
+        let m = s.tr_mul(&mv_s);
+        for i in 0..p {
+            for j in 0..=i {
+                assert_eq!(
+                    data.mass.get(i, j).to_bits(),
+                    m[(i, j)].to_bits(),
+                    "M[{i}, {j}] at round {k}"
+                );
+            }
+        }
+    }
+}
