@@ -37,7 +37,7 @@
 //!     let outcome = stepper.step(&mut sys, 3.0)?;
 //!     // The last step is [t_prev, t]; its continuous extension is available.
 //!     let t_mid = 0.5 * (stepper.t_prev() + stepper.t());
-//!     stepper.dense(t_mid, &mut x);
+//!     stepper.dense(t_mid, &mut x)?;
 //!     assert!((x[0] - t_mid.cos()).abs() < 1e-8);
 //!     if outcome == StepOutcome::ReachedStop {
 //!         break;
@@ -60,7 +60,7 @@ mod stepper;
 mod system;
 pub mod tableau;
 
-pub use error::{IntegrateError, SettingsError};
+pub use error::{DenseIncomplete, IntegrateError, SettingsError};
 pub use rk::{
     AdaptiveSettings, AnyStepper, Dopri5, Dopri5Settings, Rk4, Rk4Settings, RungeKutta,
     StepperConfig,

@@ -19,10 +19,13 @@ use super::control::{
     PiController, after_failed_stage, clip_step, dop853_error_norm, error_norm, scaled_sq,
     smallest_step,
 };
-use super::dense::Dense;
+use super::dense::{Completion, Dense};
 use super::error::{require_non_negative, require_positive};
 use super::tableau::{DOP853, DOPRI5, DenseOutput, ErrorEstimate, RK4, Tableau};
-use super::{Counters, IntegrateError, Method, OdeSystem, SettingsError, StepOutcome, Stepper};
+use super::{
+    Counters, DenseIncomplete, IntegrateError, Method, OdeSystem, SettingsError, StepOutcome,
+    Stepper,
+};
 use crate::math::Real;
 use crate::settings::IntegratorSettings;
 
@@ -459,21 +462,21 @@ fn stages<S: OdeSystem>(
     eval(sys, t1, &w.y_new, &mut rest[0], counters)
 }
 
-/// The continuous extension of the step `[t0, t0 + h]` just taken by [`stages`]: the
-/// Hermite part, then Shampine's `r₅`, or DOP853's extra stages and `r₅ … r₈`.
+/// The continuous extension of the step `[t0, t0 + h]` just taken by [`stages`], as far
+/// as it needs no more evaluations of `f`: the Hermite part, then Shampine's `r₅`; DOP853's
+/// `r₅ … r₈` are left pending for [`extended_dense`] (its extra stages evaluated only if
+/// the step is read inside).
 #[allow(clippy::too_many_arguments)]
-fn dense_output<S: OdeSystem>(
+fn dense_output(
     tab: &Tableau,
     plan: &Plan,
-    sys: &mut S,
     t0: Real,
     h: Real,
     y0: &[Real],
     k1: &[Real],
-    w: &mut Work,
+    w: &Work,
     dense: &mut Dense,
-    counters: &mut Counters,
-) -> Result<(), IntegrateError<S::Error>> {
+) {
     let s = tab.stages();
     dense.set_hermite(t0, h, y0, k1, &w.y_new, w.f_new(s));
     match tab.dense {
@@ -482,23 +485,44 @@ fn dense_output<S: OdeSystem>(
             let k = stage_slices(k1, &w.k);
             combination(&mut dense.r5, None, h, &plan.d[0], k);
         }
-        DenseOutput::Extended { c, .. } => {
-            for (m, &c) in c.iter().enumerate() {
-                // Stage index j = s + 1 + m (after f(t₁, y₁), index s); its row follows
-                // rows 2 … s in the plan.
-                let j = s + 1 + m;
-                let (done, rest) = w.k.split_at_mut(j - 1);
-                let k = stage_slices(k1, done);
-                stage_argument(&mut w.y_stage, y0, h, &plan.a[s - 1 + m], k);
-                eval(sys, t0 + c * h, &w.y_stage, &mut rest[0], counters)?;
-            }
-            let k = stage_slices(k1, &w.k);
-            let [r6, r7, r8] = &mut dense.r678;
-            for (r, d) in [&mut dense.r5, r6, r7, r8].into_iter().zip(&plan.d) {
-                combination(r, None, h, d, k);
-            }
-        }
+        DenseOutput::Extended { .. } => dense.completion = Completion::Pending,
     }
+}
+
+/// DOP853's extra stages of the step `[t0, t0 + h]` from `(y0, k1)`, whose stages
+/// `k₂ … k_{s+1}` are in `w.k` (as [`stages`] left them), and `r₅ … r₈`: the numbers
+/// [`dense_output`] would have computed right after the step, from the same inputs.
+#[allow(clippy::too_many_arguments)]
+fn extended_dense<S: OdeSystem>(
+    tab: &Tableau,
+    plan: &Plan,
+    sys: &mut S,
+    (t0, h): (Real, Real),
+    y0: &[Real],
+    k1: &[Real],
+    w: &mut Work,
+    dense: &mut Dense,
+    counters: &mut Counters,
+) -> Result<(), IntegrateError<S::Error>> {
+    let DenseOutput::Extended { c, .. } = tab.dense else {
+        return Ok(());
+    };
+    let s = tab.stages();
+    for (m, &c) in c.iter().enumerate() {
+        // Stage index j = s + 1 + m (after f(t₁, y₁), index s); its row follows rows
+        // 2 … s in the plan.
+        let j = s + 1 + m;
+        let (done, rest) = w.k.split_at_mut(j - 1);
+        let k = stage_slices(k1, done);
+        stage_argument(&mut w.y_stage, y0, h, &plan.a[s - 1 + m], k);
+        eval(sys, t0 + c * h, &w.y_stage, &mut rest[0], counters)?;
+    }
+    let k = stage_slices(k1, &w.k);
+    let [r6, r7, r8] = &mut dense.r678;
+    for (r, d) in [&mut dense.r5, r6, r7, r8].into_iter().zip(&plan.d) {
+        combination(r, None, h, d, k);
+    }
+    dense.completion = Completion::Done;
     Ok(())
 }
 
@@ -790,26 +814,19 @@ impl RungeKutta {
 
     /// Makes the step `[t, t1]` of length `h` just taken the last step (`t1` is `t + h`
     /// or the stop time: the dense output takes `h`, not `t1 − t`): its dense output
-    /// (which may evaluate `f`), then `(y_prev, f_prev) ← (y, f) ← (y₁, f(t₁, y₁))`.
-    fn accept<S: OdeSystem>(
-        &mut self,
-        sys: &mut S,
-        t1: Real,
-        h: Real,
-    ) -> Result<(), IntegrateError<S::Error>> {
+    /// (DOP853's pending), then `(y_prev, f_prev) ← (y, f) ← (y₁, f(t₁, y₁))`.
+    fn accept(&mut self, t1: Real, h: Real) {
         let s = self.tableau.stages();
         dense_output(
             self.tableau,
             &self.plan,
-            sys,
             self.t,
             h,
             &self.y,
             &self.f,
-            &mut self.work,
+            &self.work,
             &mut self.dense,
-            &mut self.counters,
-        )?;
+        );
         std::mem::swap(&mut self.y_prev, &mut self.y);
         std::mem::swap(&mut self.y, &mut self.work.y_new);
         std::mem::swap(&mut self.f_prev, &mut self.f);
@@ -818,7 +835,14 @@ impl RungeKutta {
         self.t = t1;
         self.t_end = t1;
         self.counters.steps += 1;
-        Ok(())
+    }
+
+    /// Before [`stages`] overwrites the work vectors: pending extra stages of the last
+    /// step can no longer be evaluated (the call fails, or makes a new last step).
+    fn overwrite_stages(&mut self) {
+        if self.dense.completion == Completion::Pending {
+            self.dense.completion = Completion::Lost;
+        }
     }
 
     /// One accepted adaptive step (rejected ones retried inside).
@@ -853,8 +877,8 @@ impl RungeKutta {
             // rejects the step: it shrinks by 4 and is tried again, down to the smallest
             // step (or 30 failures in a row, a factor 1e18), where the failure is returned.
             // Stage 1 is the accepted state, already evaluated: a failure there is never
-            // retried. (The extra stages of the dense output come after acceptance; a
-            // failure there is returned.)
+            // retried. (The extra stages of the dense output come after acceptance, in
+            // `complete_dense`; a failure there is returned by it.)
             match stages(
                 self.tableau,
                 &self.plan,
@@ -887,7 +911,7 @@ impl RungeKutta {
             };
             let verdict = ctrl.judge(h, err);
             if verdict.accept {
-                self.accept(sys, t1, h)?;
+                self.accept(t1, h);
                 // A step shortened to land on t_stop says little about the step the
                 // solution allows (its growth is clamped at fac_max): keep the larger of
                 // the two suggestions. A step capped by h_max informs the controller as
@@ -925,6 +949,14 @@ impl RungeKutta {
                 return Err(IntegrateError::NonFinite { t: self.t });
             }
             self.set_h_next(verdict.h_new);
+        }
+    }
+
+    /// The error of reading the last step's dense output before it is complete.
+    fn incomplete(&self) -> DenseIncomplete {
+        DenseIncomplete {
+            t_prev: self.t_prev,
+            t: self.t,
         }
     }
 
@@ -978,7 +1010,7 @@ impl RungeKutta {
         if !all_finite(&self.work.y_new) || !all_finite(self.work.f_new(s)) {
             return Err(IntegrateError::NonFinite { t: t1 });
         }
-        self.accept(sys, t1, h)?;
+        self.accept(t1, h);
         Ok(if reaches {
             StepOutcome::ReachedStop
         } else {
@@ -1025,6 +1057,7 @@ impl Stepper for RungeKutta {
         if t_stop.is_nan() || t_stop <= self.t {
             return Err(IntegrateError::StopNotAhead { t: self.t, t_stop });
         }
+        self.overwrite_stages();
         match self.control {
             Control::Adaptive { .. } => self.step_adaptive(sys, t_stop),
             Control::Fixed { .. } => self.step_fixed(sys, t_stop),
@@ -1054,6 +1087,7 @@ impl Stepper for RungeKutta {
             });
         }
         let t0 = self.t_prev;
+        self.overwrite_stages();
         stages(
             self.tableau,
             &self.plan,
@@ -1073,15 +1107,13 @@ impl Stepper for RungeKutta {
         dense_output(
             self.tableau,
             &self.plan,
-            sys,
             t0,
             t_target - t0,
             &self.y_prev,
             &self.f_prev,
-            &mut self.work,
+            &self.work,
             &mut self.dense,
-            &mut self.counters,
-        )?;
+        );
         std::mem::swap(&mut self.y, &mut self.work.y_new);
         std::mem::swap(&mut self.f, &mut self.work.k[s - 1]);
         self.t = t_target;
@@ -1097,6 +1129,7 @@ impl Stepper for RungeKutta {
         if !self.started {
             return Err(IntegrateError::NotStarted);
         }
+        self.counters.resets += 1;
         self.set_state(sys, t, y)?;
         let h_max = self.h_max;
         if let Control::Adaptive { h, .. } = &mut self.control {
@@ -1124,12 +1157,54 @@ impl Stepper for RungeKutta {
         &self.f_prev
     }
 
-    fn dense(&self, t: Real, out: &mut [Real]) {
-        self.dense.eval(&self.y_prev, t, out);
+    fn complete_dense<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+    ) -> Result<(), IntegrateError<S::Error>> {
+        match self.dense.completion {
+            Completion::Done => return Ok(()),
+            Completion::Lost => return Err(self.incomplete().into()),
+            Completion::Pending => {}
+        }
+        // f(t₁, y₁), the stage after the last, went to `self.f` when the step was
+        // accepted: lent back to the work vectors for the extra stages' rows.
+        let s = self.tableau.stages();
+        std::mem::swap(&mut self.f, &mut self.work.k[s - 1]);
+        let done = extended_dense(
+            self.tableau,
+            &self.plan,
+            sys,
+            (self.dense.t0, self.dense.h),
+            &self.y_prev,
+            &self.f_prev,
+            &mut self.work,
+            &mut self.dense,
+            &mut self.counters,
+        );
+        std::mem::swap(&mut self.f, &mut self.work.k[s - 1]);
+        done?;
+        self.counters.dense_completions += 1;
+        Ok(())
     }
 
-    fn dense_derivative(&self, t: Real, out: &mut [Real]) {
+    fn dense_complete(&self) -> bool {
+        self.dense.completion == Completion::Done
+    }
+
+    fn dense(&self, t: Real, out: &mut [Real]) -> Result<(), DenseIncomplete> {
+        if !self.dense_complete() {
+            return Err(self.incomplete());
+        }
+        self.dense.eval(&self.y_prev, t, out);
+        Ok(())
+    }
+
+    fn dense_derivative(&self, t: Real, out: &mut [Real]) -> Result<(), DenseIncomplete> {
+        if !self.dense_complete() {
+            return Err(self.incomplete());
+        }
         self.dense.eval_derivative(&self.f_prev, t, out);
+        Ok(())
     }
 
     fn set_h_max(&mut self, h_max: Real) {
