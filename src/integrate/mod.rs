@@ -5,7 +5,8 @@
 //!
 //! - [`OdeSystem`]: the system, whose right-hand side may fail.
 //! - [`Stepper`]: one accepted step at a time, the continuous extension (dense output) of
-//!   the last step, a re-step to an event time at full order, a reset at an impact, a cap
+//!   the last step (DOP853's completed on demand by [`Stepper::complete_dense`], before it
+//!   is read inside the step), a re-step to an event time at full order, a reset at an impact, a cap
 //!   on the step, and work [`Counters`]. Implemented by [`RungeKutta`], one explicit
 //!   Runge–Kutta stepper driven by its [`tableau::Tableau`]: DOPRI5 [HNW, II.4–6;
 //!   Dormand & Prince 1980; Shampine 1986], DOP853 [HNW, II.10] and RK4 [HNW, II.1],

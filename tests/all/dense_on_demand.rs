@@ -121,7 +121,11 @@ fn an_oscillator_s_dense_output_on_demand_is_the_eager_one() {
             dy[1] = -y[0];
         })
     };
-    for read in [|k: usize| k % 2 == 1, |k: usize| k % 5 == 0, |_| true] {
+    for read in [
+        |k: usize| k % 2 == 1,
+        |k: usize| k.is_multiple_of(5),
+        |_| true,
+    ] {
         let (compared, lazy) = lockstep(osc, 2, &[1.0, 0.0], (1e-10, 0.7, 12.0), read);
         assert!(compared > 100, "{compared}");
         let mut y = [0.0; 2];
@@ -179,12 +183,12 @@ fn a_step_read_only_at_its_ends_costs_twelve() {
     // Read every other step inside, re-take some: 3 more for each completion only.
     let mut read = 0;
     while s.step(&mut sys, 8.0).unwrap() != StepOutcome::ReachedStop {
-        if s.counters().steps % 2 == 0 {
+        if s.counters().steps.is_multiple_of(2) {
             s.complete_dense(&mut sys).unwrap();
             s.complete_dense(&mut sys).unwrap();
             read += 1;
         }
-        if s.counters().steps % 3 == 0 {
+        if s.counters().steps.is_multiple_of(3) {
             s.restep_to(&mut sys, s.t_prev() + 0.5 * (s.t() - s.t_prev()))
                 .unwrap();
             s.complete_dense(&mut sys).unwrap();
