@@ -575,6 +575,10 @@ pub struct RungeKutta {
     dense: Dense,
     h_max: Real,
     counters: Counters,
+    /// Complete the dense output inside every step and re-step, from the stages where
+    /// they stand (the code before the extra stages were evaluated on demand): the oracle
+    /// of the tests ([`Self::set_eager_dense`]).
+    eager_dense: bool,
 }
 
 /// The stepper of the run's method (the name of the enum it replaces).
@@ -668,6 +672,7 @@ impl RungeKutta {
             dense,
             h_max,
             counters: Counters::default(),
+            eager_dense: false,
         }
     }
 
@@ -694,6 +699,15 @@ impl RungeKutta {
         {
             settings.h_min = h_min;
         }
+    }
+
+    /// With `true`, DOP853 completes its dense output inside every accepted step and
+    /// re-step, from the stages where they stand, as before it was completed on demand
+    /// (then [`Stepper::complete_dense`] has nothing to do): the oracle of the tests, whose
+    /// dense values the completion on demand must give bit for bit. A failing extra stage
+    /// then fails the step or re-step. Default `false`.
+    pub fn set_eager_dense(&mut self, eager: bool) {
+        self.eager_dense = eager;
     }
 
     /// The step the next call of [`step`](Stepper::step) will try first, before capping
@@ -821,8 +835,14 @@ impl RungeKutta {
 
     /// Makes the step `[t, t1]` of length `h` just taken the last step (`t1` is `t + h`
     /// or the stop time: the dense output takes `h`, not `t1 − t`): its dense output
-    /// (DOP853's pending), then `(y_prev, f_prev) ← (y, f) ← (y₁, f(t₁, y₁))`.
-    fn accept(&mut self, t1: Real, h: Real) {
+    /// (DOP853's pending, or completed with `eager_dense`), then
+    /// `(y_prev, f_prev) ← (y, f) ← (y₁, f(t₁, y₁))`.
+    fn accept<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t1: Real,
+        h: Real,
+    ) -> Result<(), IntegrateError<S::Error>> {
         let s = self.tableau.stages();
         dense_output(
             self.tableau,
@@ -834,6 +854,7 @@ impl RungeKutta {
             &self.work,
             &mut self.dense,
         );
+        self.complete_eagerly(sys, (self.t, h), false)?;
         std::mem::swap(&mut self.y_prev, &mut self.y);
         std::mem::swap(&mut self.y, &mut self.work.y_new);
         std::mem::swap(&mut self.f_prev, &mut self.f);
@@ -842,6 +863,38 @@ impl RungeKutta {
         self.t = t1;
         self.t_end = t1;
         self.counters.steps += 1;
+        Ok(())
+    }
+
+    /// With `eager_dense`, completes the dense output of the step `(t0, h)` just taken,
+    /// before its stages move: from `(y_prev, f_prev)` for a re-step, else `(y, f)`.
+    fn complete_eagerly<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        step: (Real, Real),
+        restep: bool,
+    ) -> Result<(), IntegrateError<S::Error>> {
+        if !self.eager_dense || self.dense.completion != Completion::Pending {
+            return Ok(());
+        }
+        let (y0, k1) = if restep {
+            (&self.y_prev, &self.f_prev)
+        } else {
+            (&self.y, &self.f)
+        };
+        extended_dense(
+            self.tableau,
+            &self.plan,
+            sys,
+            step,
+            y0,
+            k1,
+            &mut self.work,
+            &mut self.dense,
+            &mut self.counters,
+        )?;
+        self.counters.dense_completions += 1;
+        Ok(())
     }
 
     /// Before [`stages`] overwrites the work vectors: pending extra stages of the last
@@ -918,7 +971,7 @@ impl RungeKutta {
             };
             let verdict = ctrl.judge(h, err);
             if verdict.accept {
-                self.accept(t1, h);
+                self.accept(sys, t1, h)?;
                 // A step shortened to land on t_stop says little about the step the
                 // solution allows (its growth is clamped at fac_max): keep the larger of
                 // the two suggestions. A step capped by h_max informs the controller as
@@ -1017,7 +1070,7 @@ impl RungeKutta {
         if !all_finite(&self.work.y_new) || !all_finite(self.work.f_new(s)) {
             return Err(IntegrateError::NonFinite { t: t1 });
         }
-        self.accept(t1, h);
+        self.accept(sys, t1, h)?;
         Ok(if reaches {
             StepOutcome::ReachedStop
         } else {
@@ -1121,6 +1174,7 @@ impl Stepper for RungeKutta {
             &self.work,
             &mut self.dense,
         );
+        self.complete_eagerly(sys, (t0, t_target - t0), true)?;
         std::mem::swap(&mut self.y, &mut self.work.y_new);
         std::mem::swap(&mut self.f, &mut self.work.k[s - 1]);
         self.t = t_target;
