@@ -1,8 +1,10 @@
 //! Locating the earliest closing event of the last step on its dense output.
 
+use std::convert::Infallible;
+
 use super::illinois::{Probe, Solved, illinois};
 use super::{EventError, EventFunctions};
-use crate::integrate::Stepper;
+use crate::integrate::{DenseIncomplete, IntegrateError, OdeSystem, Stepper};
 use crate::math::Real;
 
 /// Settings of the [`EventLocator`].
@@ -126,44 +128,148 @@ pub struct EventLocator {
     pub(crate) counters: LocatorCounters,
 }
 
+/// The last step of a stepper as the locator reads it: its ends, and its dense output,
+/// completed ([`Stepper::complete_dense`]) the first time it is read inside the step.
+pub(crate) trait LastStep {
+    /// The stepper.
+    type Stepper: Stepper;
+    /// The error of the system's right-hand side ([`Infallible`] for a stepper that is
+    /// only read).
+    type Error: std::error::Error + 'static;
+    /// The stepper, to read.
+    fn stepper(&self) -> &Self::Stepper;
+    /// Completes the dense output of the last step, if it is not yet.
+    fn complete_dense(&mut self) -> Result<(), IntegrateError<Self::Error>>;
+}
+
+/// A stepper only read: its dense output must be complete where it is read
+/// ([`DenseIncomplete`] otherwise).
+impl<St: Stepper> LastStep for &St {
+    type Stepper = St;
+    type Error = Infallible;
+    fn stepper(&self) -> &St {
+        self
+    }
+    fn complete_dense(&mut self) -> Result<(), IntegrateError<Infallible>> {
+        Ok(())
+    }
+}
+
+/// A stepper with its system: the dense output is completed on demand.
+pub(crate) struct Completing<'a, St, Sys> {
+    pub(crate) stepper: &'a mut St,
+    pub(crate) sys: &'a mut Sys,
+}
+
+impl<St: Stepper, Sys: OdeSystem> LastStep for Completing<'_, St, Sys> {
+    type Stepper = St;
+    type Error = Sys::Error;
+    fn stepper(&self) -> &St {
+        self.stepper
+    }
+    #[inline]
+    fn complete_dense(&mut self) -> Result<(), IntegrateError<Sys::Error>> {
+        self.stepper.complete_dense(self.sys)
+    }
+}
+
+/// The error of the event location of a [`LastStep`] whose system fails with `E`.
+type LocateError<G, E> = EventError<<G as EventFunctions>::Error, E>;
+
+/// An error of the dense output inside the location's error type.
+fn incomplete<G, E>(e: DenseIncomplete) -> EventError<G, E>
+where
+    G: std::error::Error + 'static,
+    E: std::error::Error + 'static,
+{
+    EventError::Integrate(e.into())
+}
+
+impl<G, E> EventError<G, E>
+where
+    G: std::error::Error + 'static,
+    E: std::error::Error + 'static,
+{
+    /// The failure of the location itself, or (`Err`) of the integration it made: the
+    /// dense output completed by
+    /// [`locate_completing_dense`](EventLocator::locate_completing_dense) (a failing
+    /// right-hand side), to be reported as a failure of the step it belongs to.
+    pub fn or_integration(self) -> Result<EventError<G>, IntegrateError<E>> {
+        Ok(match self {
+            EventError::Integrate(e) => return Err(e),
+            EventError::Function { t, source } => EventError::Function { t, source },
+            EventError::NonFinite { t, index } => EventError::NonFinite { t, index },
+            EventError::Dimension {
+                what,
+                expected,
+                got,
+            } => EventError::Dimension {
+                what,
+                expected,
+                got,
+            },
+            EventError::NotConverged {
+                index,
+                t_lo,
+                t_hi,
+                iters,
+            } => EventError::NotConverged {
+                index,
+                t_lo,
+                t_hi,
+                iters,
+            },
+        })
+    }
+}
+
 /// Evaluates the event functions on the dense output of the last step.
-pub(crate) struct Sampler<'a, St, G> {
-    pub(crate) stepper: &'a St,
+pub(crate) struct Sampler<'a, L, G> {
+    pub(crate) step: L,
     pub(crate) funcs: &'a mut G,
     pub(crate) s: &'a mut Scratch,
     pub(crate) counters: &'a mut LocatorCounters,
 }
 
-impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
+impl<L: LastStep, G: EventFunctions> Sampler<'_, L, G> {
+    /// The stepper.
+    fn stepper(&self) -> &L::Stepper {
+        self.step.stepper()
+    }
+
     /// The state at `t` into `y`: the stored ends of the step exactly, the dense output
-    /// inside.
-    fn state_at(&mut self, t: Real) {
-        let st = self.stepper;
+    /// inside (completed first).
+    fn state_at(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
+        let st = self.step.stepper();
         if t == st.t() {
             self.s.y.copy_from_slice(st.y());
         } else if t == st.t_prev() {
             self.s.y.copy_from_slice(st.y_prev());
         } else {
-            st.dense(t, &mut self.s.y);
+            self.step.complete_dense()?;
+            (self.step.stepper().dense(t, &mut self.s.y)).map_err(incomplete)?;
         }
+        Ok(())
     }
 
     /// The derivative `ẏ(t)` into `dy`: the stored ends of the step exactly, the dense
-    /// output's derivative inside.
-    fn derivative_at(&mut self, t: Real) {
-        let st = self.stepper;
+    /// output's derivative inside (completed first).
+    fn derivative_at(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
+        let st = self.step.stepper();
         if t == st.t() {
             self.s.dy.copy_from_slice(st.dy());
         } else if t == st.t_prev() {
             self.s.dy.copy_from_slice(st.dy_prev());
         } else {
-            st.dense_derivative(t, &mut self.s.dy);
+            self.step.complete_dense()?;
+            (self.step.stepper().dense_derivative(t, &mut self.s.dy)).map_err(incomplete)?;
         }
+        Ok(())
     }
 
     /// `g(t)` into `scratch.g`.
-    pub(crate) fn values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
-        self.state_at(t);
+    pub(crate) fn values(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
+        self.state_at(t)?;
         self.counters.value_evals += 1;
         self.funcs
             .values(t, &self.s.y, &mut self.s.g)
@@ -172,7 +278,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
 
     /// `g(t)` into `scratch.g` at an interior sample of the step: stand-ins allowed (see
     /// [`EventFunctions::interior_values`]).
-    fn interior_values(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+    fn interior_values(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
         self.counters.value_evals += 1;
         let stateless = (self.funcs)
             .interior_values_without_state(t, &mut self.s.g)
@@ -180,7 +286,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
         if stateless {
             return Ok(());
         }
-        self.state_at(t);
+        self.state_at(t)?;
         self.funcs
             .interior_values(t, &self.s.y, &mut self.s.g)
             .map_err(|source| EventError::Function { t, source })
@@ -193,7 +299,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
         &mut self,
         t: Real,
         samples: usize,
-    ) -> Result<bool, EventError<G::Error>> {
+    ) -> Result<bool, LocateError<G, L::Error>> {
         let given = (self.funcs)
             .interior_stand_ins(samples, &mut self.s.g)
             .map_err(|source| EventError::Function { t, source })?;
@@ -205,8 +311,8 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     }
 
     /// `gᵢ(t)` of the one function `i` (see [`EventFunctions::value`]).
-    fn value(&mut self, t: Real, i: usize) -> Result<Real, EventError<G::Error>> {
-        self.state_at(t);
+    fn value(&mut self, t: Real, i: usize) -> Result<Real, LocateError<G, L::Error>> {
+        self.state_at(t)?;
         self.counters.value_evals += 1;
         self.funcs
             .value(t, &self.s.y, i, &mut self.s.g)
@@ -216,8 +322,8 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// `ġᵢ(t)` of the one function `i`; [`value`](Self::value) at the same `t` must come
     /// just before. The caller's rate if it has rates, else the one-sided difference of
     /// [`rates`](Self::rates).
-    fn rate(&mut self, t: Real, i: usize) -> Result<Real, EventError<G::Error>> {
-        self.derivative_at(t);
+    fn rate(&mut self, t: Real, i: usize) -> Result<Real, LocateError<G, L::Error>> {
+        self.derivative_at(t)?;
         let given = self
             .funcs
             .rate(t, &self.s.y, &self.s.dy, i, &mut self.s.gd)
@@ -237,8 +343,8 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
 
     /// The caller's `ġ(t)` into `scratch.gd`, if it has rates; `y` must hold the state
     /// at `t` ([`values`](Self::values) at the same `t` just before).
-    pub(crate) fn caller_rates(&mut self, t: Real) -> Result<bool, EventError<G::Error>> {
-        self.derivative_at(t);
+    pub(crate) fn caller_rates(&mut self, t: Real) -> Result<bool, LocateError<G, L::Error>> {
+        self.derivative_at(t)?;
         let given = self
             .funcs
             .rates(t, &self.s.y, &self.s.dy, &mut self.s.gd)
@@ -252,7 +358,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// `ġ(t)` into `scratch.gd`; [`values`](Self::values) at the same `t` must come
     /// just before. Uses the caller's rates if it has them, else a one-sided difference
     /// of `g` along the dense output with `δ = √ε h` (the step must not be empty).
-    pub(crate) fn rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+    pub(crate) fn rates(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
         if self.caller_rates(t)? {
             return Ok(());
         }
@@ -262,7 +368,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
     /// [`rates`](Self::rates) at an interior sample, after
     /// [`interior_values`](Self::interior_values) at the same `t`: the caller's
     /// [`EventFunctions::interior_rates`] (stand-ins allowed), else the difference.
-    fn interior_rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
+    fn interior_rates(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
         let stateless = (self.funcs)
             .interior_rates_without_state(t, &mut self.s.gd)
             .map_err(|source| EventError::Function { t, source })?;
@@ -270,7 +376,7 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
             self.counters.rate_evals += 1;
             return Ok(());
         }
-        self.derivative_at(t);
+        self.derivative_at(t)?;
         let given = self
             .funcs
             .interior_rates(t, &self.s.y, &self.s.dy, &mut self.s.gd)
@@ -284,8 +390,8 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
 
     /// `ġ(t)` into `scratch.gd` by a one-sided difference of `g` along the dense output
     /// (see [`rates`](Self::rates)).
-    fn difference_rates(&mut self, t: Real) -> Result<(), EventError<G::Error>> {
-        let st = self.stepper;
+    fn difference_rates(&mut self, t: Real) -> Result<(), LocateError<G, L::Error>> {
+        let st = self.step.stepper();
         let (t0, t1) = (st.t_prev(), st.t());
         let delta = (Real::EPSILON.sqrt() * (t1 - t0)).max(16.0 * Real::EPSILON * t.abs());
         let t2 = if t + delta <= t1 {
@@ -296,7 +402,8 @@ impl<St: Stepper, G: EventFunctions> Sampler<'_, St, G> {
         if t2 == t1 {
             self.s.y2.copy_from_slice(st.y());
         } else {
-            st.dense(t2, &mut self.s.y2);
+            self.step.complete_dense()?;
+            (self.step.stepper().dense(t2, &mut self.s.y2)).map_err(incomplete)?;
         }
         self.counters.value_evals += 1;
         self.funcs
@@ -446,13 +553,44 @@ impl EventLocator {
     /// sample intervals in time order, classifying each armed function (start, sign
     /// change, dip, bounce); (3) refine each candidate with the Illinois method on the
     /// dense output; (4) keep the earliest and those within `simultaneity` of it.
+    ///
+    /// The stepper is only read: where the location reads its dense output, that must be
+    /// complete ([`Stepper::complete_dense`]; DOP853's is not after a step), else the
+    /// error is `EventError::Integrate(IntegrateError::DenseIncomplete)`. With the system
+    /// at hand, [`locate_completing_dense`](Self::locate_completing_dense) completes it
+    /// when it is first needed.
     pub fn locate<St: Stepper, G: EventFunctions>(
         &mut self,
         stepper: &St,
         funcs: &mut G,
         armed: &[bool],
     ) -> Result<Option<Event>, EventError<G::Error>> {
+        self.locate_step(stepper, funcs, armed)
+    }
+
+    /// [`locate`](Self::locate), completing the dense output of the last step
+    /// ([`Stepper::complete_dense`] with `sys`) the first time it is read inside the step:
+    /// a step located from its ends and stand-ins alone does not pay for it. A failure of
+    /// `sys` there is `EventError::Integrate(IntegrateError::Rhs)`.
+    pub fn locate_completing_dense<St: Stepper, Sys: OdeSystem, G: EventFunctions>(
+        &mut self,
+        stepper: &mut St,
+        sys: &mut Sys,
+        funcs: &mut G,
+        armed: &[bool],
+    ) -> Result<Option<Event>, EventError<G::Error, Sys::Error>> {
+        self.locate_step(Completing { stepper, sys }, funcs, armed)
+    }
+
+    /// [`locate`](Self::locate) on `step`.
+    fn locate_step<L: LastStep, G: EventFunctions>(
+        &mut self,
+        step: L,
+        funcs: &mut G,
+        armed: &[bool],
+    ) -> Result<Option<Event>, LocateError<G, L::Error>> {
         self.found.clear();
+        let stepper = step.stepper();
         self.check_dims(stepper, armed)?;
         let (t0, t1) = (stepper.t_prev(), stepper.t());
         if t1 <= t0 || !armed.iter().any(|&a| a) {
@@ -460,7 +598,7 @@ impl EventLocator {
         }
         self.counters.calls += 1;
         let mut sp = Sampler {
-            stepper,
+            step,
             funcs,
             s: &mut self.scratch,
             counters: &mut self.counters,
@@ -520,13 +658,13 @@ impl EventLocator {
 /// change needs a value `≤ 0`; a minimum to search, a rate `< 0` at an interval's start
 /// and `> 0` at its end, and every interval has a zero rate at one end; a maximum, values
 /// `≤ 0`): the rates at the end are not sampled, and `true` says the step has no event.
-fn sample<St: Stepper, G: EventFunctions>(
-    sp: &mut Sampler<'_, St, G>,
+fn sample<L: LastStep, G: EventFunctions>(
+    sp: &mut Sampler<'_, L, G>,
     smp: &mut Samples,
     settings: &LocatorSettings,
     armed: &[bool],
-) -> Result<bool, EventError<G::Error>> {
-    let (t0, t1) = (sp.stepper.t_prev(), sp.stepper.t());
+) -> Result<bool, LocateError<G, L::Error>> {
+    let (t0, t1) = (sp.stepper().t_prev(), sp.stepper().t());
     let parts = settings.samples + 1;
     let m = armed.len();
     let time = |j: usize| {
@@ -601,11 +739,11 @@ fn all_positive<const K: usize>(smp: &Samples, armed: &[bool], js: [usize; K]) -
     })
 }
 
-fn check_finite<E: std::error::Error + 'static>(
+fn check_finite<E: std::error::Error + 'static, I: std::error::Error + 'static>(
     v: &[Real],
     armed: &[bool],
     t: Real,
-) -> Result<(), EventError<E>> {
+) -> Result<(), EventError<E, I>> {
     // Every value finite (unarmed ones too, as a rule): one pass without branches.
     if v.iter().fold(true, |ok, x| ok & x.is_finite()) {
         return Ok(());
@@ -617,14 +755,14 @@ fn check_finite<E: std::error::Error + 'static>(
 }
 
 /// Stages 2–3 for function `i` on the sample interval `j`: the event it has there, if any.
-fn classify<St: Stepper, G: EventFunctions>(
-    sp: &mut Sampler<'_, St, G>,
+fn classify<L: LastStep, G: EventFunctions>(
+    sp: &mut Sampler<'_, L, G>,
     smp: &Samples,
     settings: &LocatorSettings,
     m: usize,
     i: usize,
     j: usize,
-) -> Result<Option<Event>, EventError<G::Error>> {
+) -> Result<Option<Event>, LocateError<G, L::Error>> {
     let (a, b) = (smp.ts[j], smp.ts[j + 1]);
     let (ga, gb) = (smp.gs[j * m + i], smp.gs[(j + 1) * m + i]);
     let event = |kind, t_lo, t_hi| Event {
@@ -698,14 +836,14 @@ fn cannot_dip(g_a: Real, gd_a: Real, g_b: Real, gd_b: Real, h: Real) -> bool {
 
 /// The root of `gᵢ` in `[lo, hi]`, `gᵢ(lo) > 0 ≥ gᵢ(hi)`, as a bracket to the time
 /// tolerance (Illinois on the dense output).
-pub(crate) fn root<St: Stepper, G: EventFunctions>(
-    sp: &mut Sampler<'_, St, G>,
+pub(crate) fn root<L: LastStep, G: EventFunctions>(
+    sp: &mut Sampler<'_, L, G>,
     settings: &LocatorSettings,
     i: usize,
     lo: (Real, Real),
     hi: (Real, Real),
-) -> Result<(Real, Real), EventError<G::Error>> {
-    let h = sp.stepper.t() - sp.stepper.t_prev();
+) -> Result<(Real, Real), LocateError<G, L::Error>> {
+    let h = sp.stepper().t() - sp.stepper().t_prev();
     let solved = illinois(
         |t| {
             let g = sp.value(t, i)?;
@@ -750,15 +888,15 @@ enum Found {
 /// Searches the extremum of `gᵢ` in `[a, b]` by Illinois on `±ġᵢ` (`+ġ` for a maximum,
 /// `−ġ` for a minimum; positive at `a`, negative at `b`), stopping as soon as a point
 /// on the other side of zero is met.
-fn extremum<St: Stepper, G: EventFunctions>(
-    sp: &mut Sampler<'_, St, G>,
+fn extremum<L: LastStep, G: EventFunctions>(
+    sp: &mut Sampler<'_, L, G>,
     settings: &LocatorSettings,
     i: usize,
     a: (Real, Real),
     b: (Real, Real),
     kind: Extremum,
-) -> Result<Found, EventError<G::Error>> {
-    let h = sp.stepper.t() - sp.stepper.t_prev();
+) -> Result<Found, LocateError<G, L::Error>> {
+    let h = sp.stepper().t() - sp.stepper().t_prev();
     let mut crossed = Real::NAN;
     let solved = illinois(
         |t| {

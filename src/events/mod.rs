@@ -94,7 +94,8 @@ pub use locate::{Event, EventKind, EventLocator, LocatorCounters, LocatorSetting
 pub use settle::Settled;
 
 /// A failure of event location. `G` is the error of the event functions, `E` that of the
-/// system's right-hand side (only [`EventLocator::settle`] integrates).
+/// system's right-hand side (only [`EventLocator::settle`] and
+/// [`EventLocator::locate_completing_dense`] integrate).
 #[derive(Debug, thiserror::Error)]
 pub enum EventError<G, E = Infallible>
 where

@@ -1,7 +1,7 @@
 //! Moving the stepper to a located event at full order: re-take the last step to the
 //! event time, and correct the time by Newton's method on the full-order `g`.
 
-use super::locate::{Sampler, time_tol};
+use super::locate::{Completing, Sampler, time_tol};
 use super::{Event, EventError, EventFunctions, EventKind, EventLocator};
 use crate::integrate::{OdeSystem, Stepper};
 use crate::math::Real;
@@ -78,7 +78,7 @@ impl EventLocator {
             if t > t_prev {
                 resteps += 1;
             }
-            let (g, g_dot) = self.full_order_g(stepper, funcs, i, t).map_err(lift)?;
+            let (g, g_dot) = self.full_order_g(stepper, sys, funcs, i, t)?;
             let dt = -g / g_dot;
             let tol = time_tol(t, t, h, self.settings.t_tol);
             if newton && g_dot < 0.0 && dt.abs() <= tol {
@@ -100,23 +100,26 @@ impl EventLocator {
         }
     }
 
-    /// `gᵢ` and `ġᵢ` at the stepper's current (full-order) state `t = stepper.t()`.
-    fn full_order_g<St: Stepper, G: EventFunctions>(
+    /// `gᵢ` and `ġᵢ` at the stepper's current (full-order) state `t = stepper.t()` (a
+    /// difference of `gᵢ` reads the re-taken step's dense output, completed then).
+    fn full_order_g<St: Stepper, Sys: OdeSystem, G: EventFunctions>(
         &mut self,
-        stepper: &St,
+        stepper: &mut St,
+        sys: &mut Sys,
         funcs: &mut G,
         i: usize,
         t: Real,
-    ) -> Result<(Real, Real), EventError<G::Error>> {
+    ) -> Result<(Real, Real), EventError<G::Error, Sys::Error>> {
+        let inside = stepper.t() > stepper.t_prev();
         let mut sp = Sampler {
-            stepper,
+            step: Completing { stepper, sys },
             funcs,
             s: &mut self.scratch,
             counters: &mut self.counters,
         };
         sp.values(t)?;
         let g = sp.s.g[i];
-        let g_dot = if stepper.t() > stepper.t_prev() {
+        let g_dot = if inside {
             sp.rates(t)?;
             sp.s.gd[i]
         } else if sp.caller_rates(t)? {
@@ -126,38 +129,5 @@ impl EventLocator {
             Real::NAN
         };
         Ok((g, g_dot))
-    }
-}
-
-/// An error of the event functions inside the settle error type.
-fn lift<G, E>(e: EventError<G>) -> EventError<G, E>
-where
-    G: std::error::Error + 'static,
-    E: std::error::Error + 'static,
-{
-    match e {
-        EventError::Function { t, source } => EventError::Function { t, source },
-        EventError::NonFinite { t, index } => EventError::NonFinite { t, index },
-        EventError::Dimension {
-            what,
-            expected,
-            got,
-        } => EventError::Dimension {
-            what,
-            expected,
-            got,
-        },
-        EventError::NotConverged {
-            index,
-            t_lo,
-            t_hi,
-            iters,
-        } => EventError::NotConverged {
-            index,
-            t_lo,
-            t_hi,
-            iters,
-        },
-        EventError::Integrate(e) => EventError::Integrate(e.widen()),
     }
 }

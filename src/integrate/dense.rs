@@ -24,6 +24,19 @@
 
 use crate::math::Real;
 
+/// Whether the coefficients of the last step are all there (see [`Dense::completion`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Completion {
+    /// Every coefficient is computed: the polynomial can be evaluated.
+    Done,
+    /// DOP853's `r₅ … r₈` wait for the step's extra stages, which its stages `k₂ … k₁₂`
+    /// kept in the stepper's work vectors allow to evaluate.
+    Pending,
+    /// They were pending when another step overwrote those stages (a step or re-step that
+    /// failed): they cannot be computed any more.
+    Lost,
+}
+
 /// Coefficients of the continuous extension of the last step. `y₀` itself is not stored:
 /// the stepper passes its `y_prev`.
 #[derive(Clone, Debug)]
@@ -41,6 +54,9 @@ pub(crate) struct Dense {
     pub r678: [Vec<Real>; 3],
     /// Whether the polynomial is DOP853's of degree 7.
     pub septic: bool,
+    /// Whether `r₅ … r₈` are computed ([`Completion::Done`]) or wait for DOP853's extra
+    /// stages: [`Self::eval`] and [`Self::eval_derivative`] may be called only when done.
+    pub completion: Completion,
 }
 
 impl Dense {
@@ -54,6 +70,7 @@ impl Dense {
             r5: vec![0.0; n],
             r678: Default::default(),
             septic: false,
+            completion: Completion::Done,
         }
     }
 
@@ -105,6 +122,7 @@ impl Dense {
     pub fn set_empty(&mut self, t0: Real) {
         self.t0 = t0;
         self.h = 0.0;
+        self.completion = Completion::Done;
         for v in [&mut self.r2, &mut self.r3, &mut self.r4, &mut self.r5] {
             v.fill(0.0);
         }

@@ -71,6 +71,26 @@ where
     /// A stepping call came before [`Stepper::start`](super::Stepper::start).
     #[error("the stepper was not started")]
     NotStarted,
+    /// The dense output was read inside a step before it was completed.
+    #[error(transparent)]
+    DenseIncomplete(#[from] DenseIncomplete),
+}
+
+/// [`Stepper::dense`](super::Stepper::dense) or
+/// [`dense_derivative`](super::Stepper::dense_derivative) was asked for inside a step
+/// whose dense output needs evaluations of `f` that were not made yet (DOP853's three
+/// extra stages): call [`Stepper::complete_dense`](super::Stepper::complete_dense) with
+/// the system first. Nothing was written.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "the dense output of the step [{t_prev}, {t}] is not complete: call complete_dense \
+     before reading it inside the step"
+)]
+pub struct DenseIncomplete {
+    /// Start of the step (s).
+    pub t_prev: Real,
+    /// End of the step (s).
+    pub t: Real,
 }
 
 /// Invalid integrator settings, found when a stepper is built.
@@ -146,6 +166,7 @@ impl IntegrateError<std::convert::Infallible> {
                 t_end,
             },
             IntegrateError::NotStarted => IntegrateError::NotStarted,
+            IntegrateError::DenseIncomplete(e) => IntegrateError::DenseIncomplete(e),
         }
     }
 }

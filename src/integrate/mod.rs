@@ -5,7 +5,8 @@
 //!
 //! - [`OdeSystem`]: the system, whose right-hand side may fail.
 //! - [`Stepper`]: one accepted step at a time, the continuous extension (dense output) of
-//!   the last step, a re-step to an event time at full order, a reset at an impact, a cap
+//!   the last step (DOP853's completed on demand by [`Stepper::complete_dense`], before it
+//!   is read inside the step), a re-step to an event time at full order, a reset at an impact, a cap
 //!   on the step, and work [`Counters`]. Implemented by [`RungeKutta`], one explicit
 //!   Runge–Kutta stepper driven by its [`tableau::Tableau`]: DOPRI5 [HNW, II.4–6;
 //!   Dormand & Prince 1980; Shampine 1986], DOP853 [HNW, II.10] and RK4 [HNW, II.1],
@@ -37,7 +38,7 @@
 //!     let outcome = stepper.step(&mut sys, 3.0)?;
 //!     // The last step is [t_prev, t]; its continuous extension is available.
 //!     let t_mid = 0.5 * (stepper.t_prev() + stepper.t());
-//!     stepper.dense(t_mid, &mut x);
+//!     stepper.dense(t_mid, &mut x)?;
 //!     assert!((x[0] - t_mid.cos()).abs() < 1e-8);
 //!     if outcome == StepOutcome::ReachedStop {
 //!         break;
@@ -60,7 +61,7 @@ mod stepper;
 mod system;
 pub mod tableau;
 
-pub use error::{IntegrateError, SettingsError};
+pub use error::{DenseIncomplete, IntegrateError, SettingsError};
 pub use rk::{
     AdaptiveSettings, AnyStepper, Dopri5, Dopri5Settings, Rk4, Rk4Settings, RungeKutta,
     StepperConfig,

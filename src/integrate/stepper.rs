@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{IntegrateError, Method, OdeSystem};
+use super::{DenseIncomplete, IntegrateError, Method, OdeSystem};
 use crate::math::Real;
 
 /// What one call of [`Stepper::step`] did. Neither outcome is a failure.
@@ -30,16 +30,24 @@ pub struct Counters {
     /// Steps re-taken to an event time by [`Stepper::restep_to`] (a rewind to the
     /// step's start costs nothing and is not counted).
     pub resteps: u64,
+    /// Resets of the state by [`Stepper::reset`] (one evaluation of `f` each).
+    pub resets: u64,
+    /// Dense outputs completed by [`Stepper::complete_dense`] with evaluations of `f`
+    /// (DOP853: three each; a step or re-step whose interior is never read costs none).
+    pub dense_completions: u64,
 }
 
 /// One-step integration driven from outside, with a continuous extension of the last
 /// step.
 ///
-/// The life cycle is `start` → (`step` → read `dense` / locate events → possibly
-/// `restep_to` → possibly `reset`)*. After [`step`](Stepper::step) (or
-/// [`restep_to`](Stepper::restep_to)), `[t_prev(), t()]` is the last step: its end
-/// points are `y_prev()` and `y()`, with derivatives `dy_prev()` and `dy()`, and
-/// [`dense`](Stepper::dense) evaluates the continuous extension inside it.
+/// The life cycle is `start` → (`step` → `complete_dense` if the step is read inside →
+/// read `dense` / locate events → possibly `restep_to` → possibly `reset`)*. After
+/// [`step`](Stepper::step) (or [`restep_to`](Stepper::restep_to)), `[t_prev(), t()]` is
+/// the last step: its end points are `y_prev()` and `y()`, with derivatives `dy_prev()`
+/// and `dy()`, and [`dense`](Stepper::dense) evaluates the continuous extension inside
+/// it once [`complete_dense`](Stepper::complete_dense) has made the evaluations of `f` it
+/// needs beyond the step's own (DOP853's three extra stages; none for DOPRI5 and RK4): a
+/// step whose interior is never read does not pay for them.
 ///
 /// Integration runs forward in time only. The methods are generic over the system, so
 /// the trait is not object safe; [`RungeKutta`](super::RungeKutta) runs the method chosen
@@ -102,15 +110,30 @@ pub trait Stepper {
     /// Derivative at the start of the last step.
     fn dy_prev(&self) -> &[Real];
 
+    /// Makes the continuous extension of the last step readable: the evaluations of `f`
+    /// it needs beyond the step's own, the first time it is called after a step or a
+    /// re-step (DOP853: its three extra stages, the same numbers as if they had been
+    /// evaluated right after the step); afterwards, and for DOPRI5, RK4 and an empty step,
+    /// it does nothing. A failing `f` is returned as [`IntegrateError::Rhs`] with the time
+    /// of that evaluation, and the dense output stays incomplete.
+    fn complete_dense<S: OdeSystem>(&mut self, sys: &mut S)
+    -> Result<(), IntegrateError<S::Error>>;
+
+    /// Whether the continuous extension of the last step can be read
+    /// ([`complete_dense`](Stepper::complete_dense) has nothing left to do).
+    fn dense_complete(&self) -> bool;
+
     /// Evaluates the continuous extension of the last step at `t ∈ [t_prev(), t()]` into
     /// `out` (length `n`). Outside the step the polynomial is extrapolated, which is
-    /// inaccurate. On an empty step it returns `y()`.
-    fn dense(&self, t: Real, out: &mut [Real]);
+    /// inaccurate. On an empty step it returns `y()`. [`DenseIncomplete`] (and `out`
+    /// untouched) before [`complete_dense`](Stepper::complete_dense) on a step that needs
+    /// it.
+    fn dense(&self, t: Real, out: &mut [Real]) -> Result<(), DenseIncomplete>;
 
     /// Evaluates the time derivative of the continuous extension at `t` into `out`. It
     /// interpolates `dy_prev()` and `dy()` at the ends and is one order lower than
-    /// [`dense`](Stepper::dense) inside.
-    fn dense_derivative(&self, t: Real, out: &mut [Real]);
+    /// [`dense`](Stepper::dense) inside. [`DenseIncomplete`] as for `dense`.
+    fn dense_derivative(&self, t: Real, out: &mut [Real]) -> Result<(), DenseIncomplete>;
 
     /// Largest step (s); the loop lowers it, e.g. from a bound on the closing speed of the
     /// contacts. `Real::INFINITY` removes the cap. Non-positive or NaN values are

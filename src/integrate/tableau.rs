@@ -169,7 +169,8 @@ impl Tableau {
     }
 
     /// Evaluations of `f` per step: the stages 2 … s, `f(t₁, y₁)` and the extra stages of
-    /// the dense output.
+    /// the dense output (which `RungeKutta` evaluates only when the step's dense output
+    /// is completed: `Stepper::complete_dense`).
     pub fn evaluations_per_step(&self) -> u64 {
         let extra = match self.dense {
             DenseOutput::Extended { c, .. } => c.len(),

@@ -254,6 +254,13 @@ impl<'m> Simulation<'m> {
         self.gaps.set_stand_ins(on);
     }
 
+    /// The integrator's work counters since the simulation was built (all its runs):
+    /// with the re-steps, resets and completed dense outputs that the run's counters do
+    /// not show.
+    pub fn stepper_counters(&self) -> crate::integrate::Counters {
+        self.stepper.counters()
+    }
+
     /// What the stand-ins of the force functions did in the event location: the interior
     /// samples with closed points, those that used them, the steps located again.
     pub fn stand_in_counts(&self) -> gaps::StandInCounts {
@@ -565,7 +572,12 @@ impl<'m> Simulation<'m> {
             } else if j == 0 {
                 y.copy_from_slice(self.stepper.y_prev());
             } else {
-                self.stepper.dense(t, &mut y);
+                result = (self.stepper.complete_dense(&mut self.system))
+                    .and_then(|()| Ok(self.stepper.dense(t, &mut y)?))
+                    .map_err(SimError::from);
+                if result.is_err() {
+                    break;
+                }
             }
             let shared = (self.system.kinematics_at(t, &y[..n], &y[n..nqu]))
                 .filter(|_| self.gaps.shares_kinematics());
@@ -750,20 +762,33 @@ impl<'m> Simulation<'m> {
             let step = (self.stepper.t_prev(), self.stepper.t());
             self.gaps
                 .begin_step(self.system.persistent.bounds(), step, true);
-            let mut located = self
-                .locator
-                .locate(&self.stepper, &mut self.gaps, &self.armed);
+            // The dense output of the step is completed (DOP853's extra stages) only if
+            // the location reads it inside the step; a failure of the right-hand side
+            // there fails the run as that of the step.
+            let mut located = self.locator.locate_completing_dense(
+                &mut self.stepper,
+                &mut self.system,
+                &mut self.gaps,
+                &self.armed,
+            );
             if self.gaps.stand_ins_failed() {
                 // A function left unsampled inside the step broke its bound: sample
                 // it (see `gaps::StandIns`).
                 self.gaps.begin_step(&[], step, false);
-                located = self
-                    .locator
-                    .locate(&self.stepper, &mut self.gaps, &self.armed);
+                located = self.locator.locate_completing_dense(
+                    &mut self.stepper,
+                    &mut self.system,
+                    &mut self.gaps,
+                    &self.armed,
+                );
             }
+            let located = located.map_err(|e| match e.or_integration() {
+                Ok(e) => SimError::from(e),
+                Err(e) => SimError::from(e),
+            });
             match located {
                 Ok(found) => return Ok(Some(found)),
-                Err(crate::events::EventError::Function { t: t_f, source }) => {
+                Err(SimError::Locate(crate::events::EventError::Function { t: t_f, source })) => {
                     let (t0, t1) = (self.stepper.t_prev(), self.stepper.t());
                     if !(t_f > t0 && t_f <= t1) {
                         let e: crate::events::EventError<Nested> =
@@ -778,7 +803,7 @@ impl<'m> Simulation<'m> {
                     self.stepper
                         .restep_to(&mut self.system, t0 + 0.5 * (t_f - t0))?;
                 }
-                Err(e) => return Err(e.into()),
+                Err(e) => return Err(e),
             }
         }
     }
@@ -839,7 +864,12 @@ impl<'m> Simulation<'m> {
             if t == self.stepper.t() {
                 y.copy_from_slice(self.stepper.y());
             } else {
-                self.stepper.dense(t, &mut y);
+                result = (self.stepper.complete_dense(&mut self.system))
+                    .and_then(|()| Ok(self.stepper.dense(t, &mut y)?))
+                    .map_err(SimError::from);
+                if result.is_err() {
+                    break;
+                }
             }
             result = self.sample(t, &y, false, observer);
             if result.is_err() {

@@ -102,7 +102,7 @@ fn bounce<S: Stepper>(stepper: &mut S, locator: &mut EventLocator, ball_run: Bal
         let t_end = event.map_or(stepper.t(), |e| e.t);
         for q in 0..=20 {
             let t = stepper.t_prev() + (t_end - stepper.t_prev()) * q as f64 / 20.0;
-            stepper.dense(t, &mut y);
+            stepper.dense(t, &mut y).unwrap();
             out.lowest = out.lowest.min(y[0]);
         }
         let Some(event) = event else { continue };
@@ -114,7 +114,7 @@ fn bounce<S: Stepper>(stepper: &mut S, locator: &mut EventLocator, ball_run: Bal
                 .t
         } else {
             // Interpolant only: the state at the event from the dense output.
-            stepper.dense(event.t, &mut y);
+            stepper.dense(event.t, &mut y).unwrap();
             let yy = y;
             stepper.reset(&mut sys, event.t, &yy).unwrap();
             event.t
@@ -942,7 +942,7 @@ fn settle_gives_the_full_order_state() {
     d5.start(&mut sys, 0.0, &[h0, 0.0]).unwrap();
     let (ev, _) = first_event(&mut d5, &mut sys, &mut gap, &mut locator, &[true], 2.0).unwrap();
     let mut y_dense = [0.0; 2];
-    d5.dense(ev.t, &mut y_dense);
+    d5.dense(ev.t, &mut y_dense).unwrap();
     let s = locator.settle(&mut d5, &mut sys, &mut gap, &ev).unwrap();
     println!(
         "{ev:?}\n{s:?}, dense v {:.3e} off, settled v {:.3e} off",

@@ -22,6 +22,7 @@ mod cli_repair;
 mod cli_run;
 mod contact_gap;
 mod contact_points;
+mod dense_on_demand;
 mod dynamics;
 mod event_stand_ins;
 mod events;
