@@ -3,7 +3,8 @@
 //! the tip sliding in persistent contact.
 //!
 //! - `run 5 s no log`: the whole simulation to 5 s at rtol 1e-10 with no observer (target
-//!   ≤ 0.3 ms);
+//!   ≤ 0.3 ms), with the scene's method, DOPRI5;
+//! - `run 5 s no log dop853`: the same with DOP853;
 //! - `run 5 s log 100 Hz`: the same with the MCAP log at 100 Hz into memory (target ≤ 1.2 ×
 //!   the unlogged run);
 //! - `run 5 s log 100 Hz uncompressed`: the same log with uncompressed chunks (what LZ4
@@ -21,7 +22,7 @@ use std::io::Cursor;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ricochet::integrate::OdeSystem;
+use ricochet::integrate::{Method, OdeSystem};
 use ricochet::log::{Compression, LogOptions, LogWriter, RunLogger};
 use ricochet::scene::Scene;
 use ricochet::sim::{MaterialOverride, MotionSystem, NullObserver, RunSummary, Simulation};
@@ -69,6 +70,21 @@ fn kane(c: &mut Criterion) {
     );
     let mut group = c.benchmark_group("kane");
     group.bench_function("run 5 s no log", |b| b.iter(|| black_box(run(&s))));
+    // The same run with DOP853, the method for tight tolerances (issue 16): its extra
+    // stages of the dense output are evaluated only for the steps read inside.
+    let mut s853 = s.clone();
+    s853.settings.integrator.method = Method::Dop853;
+    let summary = run(&s853);
+    println!(
+        "the same with DOP853: {} steps ({} rejected), {} rhs evaluations, drift {:.3e} J",
+        summary.counters.steps,
+        summary.counters.rejected,
+        summary.counters.rhs_evals,
+        summary.audit.drift()
+    );
+    group.bench_function("run 5 s no log dop853", |b| {
+        b.iter(|| black_box(run(&s853)))
+    });
     group.bench_function("run 5 s log 100 Hz", |b| {
         b.iter(|| black_box(run_logged(&s, LogOptions::default())))
     });
