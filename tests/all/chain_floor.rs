@@ -327,3 +327,19 @@ fn the_32_link_chain_with_little_friction_gets_past_unresolved_approaches() {
 fn the_32_link_chain_with_little_friction_and_restitution_gets_past_two_stalls() {
     chain_floor_reaches_its_end(2.6, 0.6, 0.1);
 }
+
+/// The 32-link chain on the floor with μ = 0.1 and e one ulp below 0.6, to 1.5 s. From
+/// t = 1.3905 s links 25–27 lie folded in a Z, links 25 and 27 side by side with both
+/// points of their pair sticking: the two normal rows lock the pair's relative motion, and
+/// the two tangential rows are identical. Their equations are consistent only as far as
+/// the points' velocities vanish: the Z turns at 2.45 rad/s while one point closes and the
+/// other opens at 5e-8 m/s (the drift of held points), and the velocity products of the
+/// tangential rows differ by `ω (v_n1 − v_n2)` = 2.5e-7 m/s². The selection took the
+/// modes with that residual (Lemke's check, `lcp::CHECK_TOL`), the right-hand side refused
+/// them at 1e-9 of its scales once the forces had decreased (1.3e-7 m/s² at t = 1.3909 s):
+/// "the forces of the closed contact points have no solution", every step refused. The
+/// right-hand side now holds a selection's modes to the selection's tolerance.
+#[test]
+fn the_32_link_chain_folded_in_a_z_holds_its_redundant_sticking_points() {
+    chain_floor_reaches_its_end(1.5, 0.5999999999999999, 0.1);
+}
