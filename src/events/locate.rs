@@ -4,7 +4,7 @@ use std::convert::Infallible;
 
 use super::illinois::{Probe, Solved, illinois};
 use super::{EventError, EventFunctions};
-use crate::integrate::{DenseIncomplete, IntegrateError, OdeSystem, Stepper};
+use crate::integrate::{IntegrateError, OdeSystem, Stepper};
 use crate::math::Real;
 
 /// Settings of the [`EventLocator`].
@@ -138,20 +138,34 @@ pub(crate) trait LastStep {
     type Error: std::error::Error + 'static;
     /// The stepper, to read.
     fn stepper(&self) -> &Self::Stepper;
-    /// Completes the dense output of the last step, if it is not yet.
-    fn complete_dense(&mut self) -> Result<(), IntegrateError<Self::Error>>;
+    /// The dense output at `t` inside the last step into `out`, completed first if it can
+    /// be ([`Stepper::dense_completing`]).
+    fn dense(&mut self, t: Real, out: &mut [Real]) -> Result<(), IntegrateError<Self::Error>>;
+    /// Its derivative likewise ([`Stepper::dense_derivative_completing`]).
+    fn dense_derivative(
+        &mut self,
+        t: Real,
+        out: &mut [Real],
+    ) -> Result<(), IntegrateError<Self::Error>>;
 }
 
 /// A stepper only read: its dense output must be complete where it is read
-/// ([`DenseIncomplete`] otherwise).
+/// ([`DenseIncomplete`](crate::integrate::DenseIncomplete) otherwise).
 impl<St: Stepper> LastStep for &St {
     type Stepper = St;
     type Error = Infallible;
     fn stepper(&self) -> &St {
         self
     }
-    fn complete_dense(&mut self) -> Result<(), IntegrateError<Infallible>> {
-        Ok(())
+    fn dense(&mut self, t: Real, out: &mut [Real]) -> Result<(), IntegrateError<Infallible>> {
+        Ok(Stepper::dense(*self, t, out)?)
+    }
+    fn dense_derivative(
+        &mut self,
+        t: Real,
+        out: &mut [Real],
+    ) -> Result<(), IntegrateError<Infallible>> {
+        Ok(Stepper::dense_derivative(*self, t, out)?)
     }
 }
 
@@ -168,22 +182,21 @@ impl<St: Stepper, Sys: OdeSystem> LastStep for Completing<'_, St, Sys> {
         self.stepper
     }
     #[inline]
-    fn complete_dense(&mut self) -> Result<(), IntegrateError<Sys::Error>> {
-        self.stepper.complete_dense(self.sys)
+    fn dense(&mut self, t: Real, out: &mut [Real]) -> Result<(), IntegrateError<Sys::Error>> {
+        self.stepper.dense_completing(self.sys, t, out)
+    }
+    #[inline]
+    fn dense_derivative(
+        &mut self,
+        t: Real,
+        out: &mut [Real],
+    ) -> Result<(), IntegrateError<Sys::Error>> {
+        self.stepper.dense_derivative_completing(self.sys, t, out)
     }
 }
 
 /// The error of the event location of a [`LastStep`] whose system fails with `E`.
 type LocateError<G, E> = EventError<<G as EventFunctions>::Error, E>;
-
-/// An error of the dense output inside the location's error type.
-fn incomplete<G, E>(e: DenseIncomplete) -> EventError<G, E>
-where
-    G: std::error::Error + 'static,
-    E: std::error::Error + 'static,
-{
-    EventError::Integrate(e.into())
-}
 
 impl<G, E> EventError<G, E>
 where
@@ -246,8 +259,7 @@ impl<L: LastStep, G: EventFunctions> Sampler<'_, L, G> {
         } else if t == st.t_prev() {
             self.s.y.copy_from_slice(st.y_prev());
         } else {
-            self.step.complete_dense()?;
-            (self.step.stepper().dense(t, &mut self.s.y)).map_err(incomplete)?;
+            self.step.dense(t, &mut self.s.y)?;
         }
         Ok(())
     }
@@ -261,8 +273,7 @@ impl<L: LastStep, G: EventFunctions> Sampler<'_, L, G> {
         } else if t == st.t_prev() {
             self.s.dy.copy_from_slice(st.dy_prev());
         } else {
-            self.step.complete_dense()?;
-            (self.step.stepper().dense_derivative(t, &mut self.s.dy)).map_err(incomplete)?;
+            self.step.dense_derivative(t, &mut self.s.dy)?;
         }
         Ok(())
     }
@@ -402,8 +413,7 @@ impl<L: LastStep, G: EventFunctions> Sampler<'_, L, G> {
         if t2 == t1 {
             self.s.y2.copy_from_slice(st.y());
         } else {
-            self.step.complete_dense()?;
-            (self.step.stepper().dense(t2, &mut self.s.y2)).map_err(incomplete)?;
+            self.step.dense(t2, &mut self.s.y2)?;
         }
         self.counters.value_evals += 1;
         self.funcs

@@ -498,7 +498,8 @@ fn dense_output(
 
 /// DOP853's extra stages of the step `[t0, t0 + h]` from `(y0, k1)`, whose stages
 /// `k₂ … k_{s+1}` are in `w.k` (as [`stages`] left them), and `r₅ … r₈`: the numbers
-/// [`dense_output`] would have computed right after the step, from the same inputs.
+/// [`dense_output`] would have computed right after the step, from the same inputs;
+/// counted in `counters.dense_completions`.
 #[allow(clippy::too_many_arguments)]
 fn extended_dense<S: OdeSystem>(
     tab: &Tableau,
@@ -530,6 +531,7 @@ fn extended_dense<S: OdeSystem>(
         combination(r, None, h, d, k);
     }
     dense.completion = Completion::Done;
+    counters.dense_completions += 1;
     Ok(())
 }
 
@@ -892,9 +894,7 @@ impl RungeKutta {
             &mut self.work,
             &mut self.dense,
             &mut self.counters,
-        )?;
-        self.counters.dense_completions += 1;
-        Ok(())
+        )
     }
 
     /// Before [`stages`] overwrites the work vectors: pending extra stages of the last
@@ -1243,9 +1243,7 @@ impl Stepper for RungeKutta {
             &mut self.counters,
         );
         std::mem::swap(&mut self.f, &mut self.work.k[s - 1]);
-        done?;
-        self.counters.dense_completions += 1;
-        Ok(())
+        done
     }
 
     fn dense_complete(&self) -> bool {

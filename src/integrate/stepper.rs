@@ -135,6 +135,31 @@ pub trait Stepper {
     /// [`dense`](Stepper::dense) inside. [`DenseIncomplete`] as for `dense`.
     fn dense_derivative(&self, t: Real, out: &mut [Real]) -> Result<(), DenseIncomplete>;
 
+    /// [`dense`](Stepper::dense) at `t` inside the last step, its continuous extension
+    /// completed first with `sys` ([`complete_dense`](Stepper::complete_dense)): what a
+    /// reader with the system at hand calls.
+    fn dense_completing<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t: Real,
+        out: &mut [Real],
+    ) -> Result<(), IntegrateError<S::Error>> {
+        self.complete_dense(sys)?;
+        Ok(self.dense(t, out)?)
+    }
+
+    /// [`dense_derivative`](Stepper::dense_derivative) at `t`, completed first as in
+    /// [`dense_completing`](Stepper::dense_completing).
+    fn dense_derivative_completing<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t: Real,
+        out: &mut [Real],
+    ) -> Result<(), IntegrateError<S::Error>> {
+        self.complete_dense(sys)?;
+        Ok(self.dense_derivative(t, out)?)
+    }
+
     /// Largest step (s); the loop lowers it, e.g. from a bound on the closing speed of the
     /// contacts. `Real::INFINITY` removes the cap. Non-positive or NaN values are
     /// ignored.

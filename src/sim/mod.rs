@@ -572,8 +572,7 @@ impl<'m> Simulation<'m> {
             } else if j == 0 {
                 y.copy_from_slice(self.stepper.y_prev());
             } else {
-                result = (self.stepper.complete_dense(&mut self.system))
-                    .and_then(|()| Ok(self.stepper.dense(t, &mut y)?))
+                result = (self.stepper.dense_completing(&mut self.system, t, &mut y))
                     .map_err(SimError::from);
                 if result.is_err() {
                     break;
@@ -864,8 +863,7 @@ impl<'m> Simulation<'m> {
             if t == self.stepper.t() {
                 y.copy_from_slice(self.stepper.y());
             } else {
-                result = (self.stepper.complete_dense(&mut self.system))
-                    .and_then(|()| Ok(self.stepper.dense(t, &mut y)?))
+                result = (self.stepper.dense_completing(&mut self.system, t, &mut y))
                     .map_err(SimError::from);
                 if result.is_err() {
                     break;
