@@ -456,11 +456,12 @@ impl Simulation<'_> {
         ws: &mut ManifoldWorkspace,
         out: &mut Vec<Touch>,
     ) -> Result<(), SimError> {
+        self.map.place(self.model, t, q, u)?;
         for &pair in near {
             for (contact, local) in
                 pair_points(self.model, &self.sampler, pair, self.scales.gap_tol, ws)?
             {
-                let frame = self.map.frame_perp(self.model, (pair, contact), t, q, u)?;
+                let frame = self.map.placed_frame_perp(self.model, (pair, contact), t)?;
                 out.push(Touch {
                     pair,
                     contact,

@@ -307,12 +307,42 @@ impl ImpactMap {
     fn frame_with(
         &mut self,
         model: &Model,
-        (pair, contact): (PairId, PairContact),
+        point: (PairId, PairContact),
         tangent: Tangent,
         (t, q, u): (Real, &[Real], &[Real]),
     ) -> Result<ContactFrame, SimError> {
+        self.place(model, t, q, u)?;
+        self.placed_frame(model, point, tangent, t)
+    }
+
+    /// Places the bodies at `(t, q, u)`: the positions and velocities that
+    /// [`Self::placed_frame_perp`] reads.
+    pub fn place(&mut self, model: &Model, t: Real, q: &[Real], u: &[Real]) -> Result<(), SimError> {
         update_positions(model, &mut self.data, t, q).map_err(|e| SimError::at(t, e))?;
-        update_velocities(model, &mut self.data, u).map_err(|e| SimError::at(t, e))?;
+        update_velocities(model, &mut self.data, u).map_err(|e| SimError::at(t, e))
+    }
+
+    /// [`Self::frame_perp`] at the `(t, q, u)` of the last [`Self::place`]: the frames of
+    /// several points at one instant place the bodies once (the same numbers: the
+    /// kinematics of the same `(t, q, u)`).
+    pub fn placed_frame_perp(
+        &mut self,
+        model: &Model,
+        point: (PairId, PairContact),
+        t: Real,
+    ) -> Result<ContactFrame, SimError> {
+        self.placed_frame(model, point, Tangent::Perp, t)
+    }
+
+    /// The frame of `point` at the positions and velocities in `data`; its rows are left
+    /// in `j_n`, `j_t`.
+    fn placed_frame(
+        &mut self,
+        model: &Model,
+        (pair, contact): (PairId, PairContact),
+        tangent: Tangent,
+        t: Real,
+    ) -> Result<ContactFrame, SimError> {
         frame_at(
             model,
             &self.data,
@@ -731,8 +761,9 @@ impl ImpactMap {
         fit_matrix(&mut set.jac, 2 * k, nu);
         set.frames.clear();
         fit_vector(&mut set.v, 2 * k);
-        for (i, (pair, contact)) in points.enumerate() {
-            let frame = self.frame_at_point(model, (pair, contact), t, q, u)?;
+        self.place(model, t, q, u)?;
+        for (i, point) in points.enumerate() {
+            let frame = self.placed_frame(model, point, Tangent::AlongSlip, t)?;
             for r in 0..nu {
                 set.jac[(2 * i, r)] = self.j_n[r];
                 set.jac[(2 * i + 1, r)] = self.j_t[r];
