@@ -317,7 +317,13 @@ impl ImpactMap {
 
     /// Places the bodies at `(t, q, u)`: the positions and velocities that
     /// [`Self::placed_frame_perp`] reads.
-    pub fn place(&mut self, model: &Model, t: Real, q: &[Real], u: &[Real]) -> Result<(), SimError> {
+    pub fn place(
+        &mut self,
+        model: &Model,
+        t: Real,
+        q: &[Real],
+        u: &[Real],
+    ) -> Result<(), SimError> {
         update_positions(model, &mut self.data, t, q).map_err(|e| SimError::at(t, e))?;
         update_velocities(model, &mut self.data, u).map_err(|e| SimError::at(t, e))
     }
