@@ -300,6 +300,40 @@ fn run_writes_the_log_and_prints_the_table_and_the_audit() {
     assert!((audit_value(&stdout, "E_end − E_0") - (sum + contact + drift)).abs() < 1e-9);
 }
 
+/// The README's quick start shows what the main job prints (`cargo run --release -- run
+/// scenes/kane_double_pendulum.toml`, in the repository's folder): every line of its
+/// transcript but the elisions (`…`) is a line of the output, in the same order. The
+/// transcript had gone stale (127 steps and 907 right-hand sides where the run takes 128
+/// and 926, an energy balance of older versions in its fifth digit) with no test to say so.
+#[test]
+fn the_readme_s_transcript_is_what_the_main_job_prints() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let command = "cargo run --release -- run scenes/kane_double_pendulum.toml";
+    let after = &readme[readme.find(command).expect("the README's main job")..];
+    let block = after
+        .split("```text\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("the transcript after the main job");
+    let shown: Vec<&str> = (block.lines()).filter(|l| l.trim() != "…").collect();
+    assert!(shown.len() >= 10, "{block}");
+
+    let dir = TempDir::new("readme");
+    let stdout = run_ok(
+        dir.path(),
+        &[scene_path("kane_double_pendulum").to_str().unwrap()],
+    );
+    let mut printed = stdout.lines();
+    for line in &shown {
+        assert!(
+            printed.any(|p| p == *line),
+            "the README shows a line the main job does not print (or not in that order):\n\
+             {line}\n\nprinted:\n{stdout}"
+        );
+    }
+}
+
 #[test]
 fn run_writes_where_told_and_the_same_bytes_as_the_library() {
     let dir = TempDir::new("output");
