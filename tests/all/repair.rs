@@ -566,3 +566,73 @@ fn a_short_attachment_record_is_unreadable() {
         Err(LogError::NotMcap { .. })
     ));
 }
+
+/// A writer killed while it overwrites a chunk's placeholder header with the true one (one
+/// write, which Linux may stop between two pages for SIGKILL) leaves the header's first
+/// bytes true and the rest still the placeholder: every such state, from none of the header
+/// written to all of it, with the file ending at the chunk's end (its message indexes come
+/// after the header). Each is cut short — not "damaged", which said a byte changed after
+/// it was written (`cli_repair::a_killed_run_is_repaired` met one once) — and the chunk's
+/// messages are all salvaged: `log::read` and `repair` keep as many as with the whole
+/// header written.
+#[test]
+fn a_chunk_header_cut_while_being_filled_in_is_cut_short() {
+    let options = LogOptions {
+        chunk_size: 16 * 1024,
+        ..LogOptions::default()
+    };
+    let original = ball_log(1.0, options);
+    let all = messages(&original);
+    let summary = mcap::Summary::read(&original).unwrap().unwrap();
+    let chunk = &summary.chunk_indexes[1];
+    let (start, length) = (
+        chunk.chunk_start_offset as usize,
+        chunk.chunk_length as usize,
+    );
+    // The placeholder mcap writes when it opens a chunk: length, sizes and CRC all ones,
+    // times zero, the compression's name as in the true header.
+    let name = u32::from_le_bytes(original[start + 37..start + 41].try_into().unwrap()) as usize;
+    let header = 41 + name + 8;
+    let truth = &original[start..start + header];
+    let mut placeholder = truth.to_vec();
+    placeholder[1..9].fill(0xFF);
+    placeholder[9..25].fill(0);
+    placeholder[25..37].fill(0xFF);
+    placeholder[header - 8..].fill(0xFF);
+
+    let cut_at = |written: usize| -> Vec<u8> {
+        let mut bytes = original[..start + length].to_vec();
+        bytes[start..start + header].copy_from_slice(&placeholder);
+        bytes[start..start + written].copy_from_slice(&truth[..written]);
+        bytes
+    };
+    let whole = cut_at(header);
+    let (_, whole_report) = repair_bytes(&whole).unwrap();
+    assert_eq!(whole_report.end, InputEnd::BetweenRecords);
+    let kept = whole_report.messages;
+    assert!(
+        kept > 0 && (kept as usize) < all.len(),
+        "{kept} of {}",
+        all.len()
+    );
+    for written in 0..header {
+        let bytes = cut_at(written);
+        let read = ricochet::log::read_bytes(&bytes).unwrap();
+        assert!(
+            matches!(read.ending, ricochet::log::Ending::Truncated { .. }),
+            "{written} bytes of the header written: {:?}",
+            read.ending
+        );
+        assert_eq!(read.message_counts.values().sum::<u64>(), kept, "{written}");
+        let (fixed, report) = repair_bytes(&bytes).unwrap();
+        assert_eq!(
+            report.end,
+            InputEnd::InsideRecord { opcode: 0x06 },
+            "{written} bytes of the header written"
+        );
+        assert_eq!(report.stopped_at, start as u64, "{written}");
+        assert_eq!(report.messages, kept, "{written}");
+        let got = messages(&fixed);
+        assert!(got[..] == all[..got.len()], "{written}: not a prefix");
+    }
+}

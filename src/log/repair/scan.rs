@@ -99,6 +99,10 @@ enum Halt {
     NoHeader,
     /// The record starting at this offset does not decode.
     Unreadable { start: usize, error: String },
+    /// The chunk starting at this offset does not decode, and its header still holds the
+    /// placeholder its writer fills in when it closes the chunk ([`header_patch_cut`]):
+    /// the writer was stopped while finishing it.
+    Unfinished { start: usize },
     /// `visit` failed (writing the output).
     Visit(LogError),
 }
@@ -137,7 +141,12 @@ impl Reading<'_> {
                 self.data_end = Some(start);
                 return ControlFlow::Continue(());
             }
-            op::CHUNK => chunk_records(&self.input[start..self.offset]),
+            op::CHUNK => match chunk_records(&self.input[start..self.offset]) {
+                Err(_) if header_patch_cut(body) => {
+                    return ControlFlow::Break(Halt::Unfinished { start });
+                }
+                records => records,
+            },
             _ => kept(opcode, body).map(|r| r.into_iter().collect()),
         };
         match records {
@@ -163,6 +172,9 @@ impl Reading<'_> {
             (Fed::Stopped(Halt::Visit(e)), _) => return Err(e),
             (Fed::Stopped(Halt::Unreadable { start, error }), _) => {
                 (InputEnd::Unreadable { error }, start)
+            }
+            (Fed::Stopped(Halt::Unfinished { start }), _) => {
+                (InputEnd::InsideRecord { opcode: op::CHUNK }, start)
             }
             (Fed::Failed(e), Some(end)) => {
                 let error = e.to_string();
@@ -198,6 +210,29 @@ fn why_stopped(input: &[u8], offset: usize, error: &McapError) -> InputEnd {
             },
         },
     }
+}
+
+/// Whether the body of a chunk record still ends its header with the placeholder of an
+/// unfinished chunk: the writer (`mcap`'s `ChunkWriter`) opens a chunk with a header whose
+/// record length and sizes are all ones (`!0`) and, once the chunk's data is written,
+/// seeks back and overwrites that header in one write, from its start. A writer killed
+/// during that write can leave its first bytes written and the rest not (Linux stops a
+/// write between two pages for a fatal signal): the record length is then the true one,
+/// and the header's last field, the compressed size, keeps at least its most significant
+/// byte `0xFF` — 2⁵⁶ bytes or more, which no chunk has. Such a chunk is cut short, not
+/// damaged (a file with the length still all ones reads as cut short already: its record
+/// runs past the end of the file).
+///
+/// The header: start and end times (u64 each), uncompressed size (u64), uncompressed CRC
+/// (u32), the compression's name (u32 length and bytes), compressed size (u64).
+fn header_patch_cut(body: &[u8]) -> bool {
+    let Some(&[a, b, c, d]) = body.get(28..32) else {
+        return false;
+    };
+    let name = u32::from_le_bytes([a, b, c, d]) as usize;
+    // The most significant byte of the compressed size (little-endian).
+    let last = 32usize.checked_add(name).and_then(|at| at.checked_add(7));
+    last.and_then(|at| body.get(at)) == Some(&0xFF)
 }
 
 /// `error` with its causes (mcap's "Record parse failed" hides binrw's message).
