@@ -425,7 +425,7 @@ impl Simulation<'_> {
         let mut ws = std::mem::take(&mut self.scratch.manifolds);
         let result = self
             .near_pairs(t, self.scales.gap_tol, &mut near)
-            .and_then(|()| self.touching_of(t, q, u, &near, &mut ws, out));
+            .and_then(|()| self.touching_of(t, &near, &mut ws, out));
         self.scratch.near = near;
         self.scratch.manifolds = ws;
         result?;
@@ -450,18 +450,16 @@ impl Simulation<'_> {
     fn touching_of(
         &mut self,
         t: Real,
-        q: &[Real],
-        u: &[Real],
         near: &[PairId],
         ws: &mut ManifoldWorkspace,
         out: &mut Vec<Touch>,
     ) -> Result<(), SimError> {
-        self.map.place(self.model, t, q, u)?;
         for &pair in near {
             for (contact, local) in
                 pair_points(self.model, &self.sampler, pair, self.scales.gap_tol, ws)?
             {
-                let frame = self.map.placed_frame_perp(self.model, (pair, contact), t)?;
+                let point = (pair, contact);
+                let frame = (self.map).frame_perp_in(self.model, &self.sampler, point, t)?;
                 out.push(Touch {
                     pair,
                     contact,

@@ -288,60 +288,43 @@ impl ImpactMap {
         q: &[Real],
         u: &[Real],
     ) -> Result<ContactFrame, SimError> {
-        self.frame_with(model, point, Tangent::AlongSlip, (t, q, u))
-    }
-
-    /// The frame (tangent `perp(n)`) of `pair` at its contact point `contact`, at
-    /// `(t, q, u)`.
-    pub fn frame_perp(
-        &mut self,
-        model: &Model,
-        point: (PairId, PairContact),
-        t: Real,
-        q: &[Real],
-        u: &[Real],
-    ) -> Result<ContactFrame, SimError> {
-        self.frame_with(model, point, Tangent::Perp, (t, q, u))
-    }
-
-    fn frame_with(
-        &mut self,
-        model: &Model,
-        point: (PairId, PairContact),
-        tangent: Tangent,
-        (t, q, u): (Real, &[Real], &[Real]),
-    ) -> Result<ContactFrame, SimError> {
         self.place(model, t, q, u)?;
-        self.placed_frame(model, point, tangent, t)
+        self.placed_frame(model, point, Tangent::AlongSlip, t)
     }
 
-    /// Places the bodies at `(t, q, u)`: the positions and velocities that
-    /// [`Self::placed_frame_perp`] reads.
-    pub fn place(
+    /// The frame (tangent `perp(n)`) of `pair` at its contact point `contact`, at the
+    /// instant `t` whose positions and velocities `data` holds (the caller's, already
+    /// placed there: the touching points of an instant read the kinematics the contact
+    /// query used, computed once). Its rows are left in `j_n`, `j_t`.
+    pub fn frame_perp_in(
         &mut self,
         model: &Model,
+        data: &Data,
+        (pair, contact): (PairId, PairContact),
         t: Real,
-        q: &[Real],
-        u: &[Real],
-    ) -> Result<(), SimError> {
+    ) -> Result<ContactFrame, SimError> {
+        frame_at(
+            model,
+            data,
+            pair,
+            contact,
+            Tangent::Perp,
+            &mut self.frame_ws,
+            &mut self.j_n,
+            &mut self.j_t,
+        )
+        .map_err(|e| SimError::at(t, e))
+    }
+
+    /// Places the bodies of `data` at `(t, q, u)`: the positions and velocities that
+    /// [`Self::placed_frame`] reads (once for the frames of several points at one instant).
+    fn place(&mut self, model: &Model, t: Real, q: &[Real], u: &[Real]) -> Result<(), SimError> {
         update_positions(model, &mut self.data, t, q).map_err(|e| SimError::at(t, e))?;
         update_velocities(model, &mut self.data, u).map_err(|e| SimError::at(t, e))
     }
 
-    /// [`Self::frame_perp`] at the `(t, q, u)` of the last [`Self::place`]: the frames of
-    /// several points at one instant place the bodies once (the same numbers: the
-    /// kinematics of the same `(t, q, u)`).
-    pub fn placed_frame_perp(
-        &mut self,
-        model: &Model,
-        point: (PairId, PairContact),
-        t: Real,
-    ) -> Result<ContactFrame, SimError> {
-        self.placed_frame(model, point, Tangent::Perp, t)
-    }
-
-    /// The frame of `point` at the positions and velocities in `data`; its rows are left
-    /// in `j_n`, `j_t`.
+    /// The frame of `point` at the positions and velocities of the last [`Self::place`]
+    /// (the instant `t`); its rows are left in `j_n`, `j_t`.
     fn placed_frame(
         &mut self,
         model: &Model,
