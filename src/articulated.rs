@@ -43,7 +43,8 @@ use crate::model::{JointId, Model};
 
 /// The spatial inertia `I` as a symmetric 3 × 3 matrix acting on `(ω, v_x, v_y)`:
 /// `I V = (I_O ω + h × v, m v + ω perp(h))` ([`Inertia::mul_twist`]).
-fn inertia_matrix(i: &Inertia) -> Matrix3<Real> {
+#[doc(hidden)]
+pub fn inertia_matrix(i: &Inertia) -> Matrix3<Real> {
     let (hx, hy) = (i.h.x, i.h.y);
     Matrix3::new(
         i.i_o, -hy, hx, //
@@ -54,7 +55,8 @@ fn inertia_matrix(i: &Inertia) -> Matrix3<Real> {
 
 /// The projection `P(a)` of an absolute revolute joint at `a` ([`Twist::projected_at`]):
 /// `(ω, v) ↦ (0, v + ω perp(a))`.
-fn projection_matrix(a: Vec2) -> Matrix3<Real> {
+#[doc(hidden)]
+pub fn projection_matrix(a: Vec2) -> Matrix3<Real> {
     Matrix3::new(
         0.0, 0.0, 0.0, //
         -a.y, 1.0, 0.0, //
@@ -62,19 +64,22 @@ fn projection_matrix(a: Vec2) -> Matrix3<Real> {
     )
 }
 
-fn twist_vector(s: &Twist) -> Vector3<Real> {
+#[doc(hidden)]
+pub fn twist_vector(s: &Twist) -> Vector3<Real> {
     Vector3::new(s.w, s.v.x, s.v.y)
 }
 
 /// `P(a) x` for a twist `x`.
 #[inline]
-fn project_twist(a: Vec2, x: &Vector3<Real>) -> Vector3<Real> {
+#[doc(hidden)]
+pub fn project_twist(a: Vec2, x: &Vector3<Real>) -> Vector3<Real> {
     Vector3::new(0.0, x[1] - a.y * x[0], x[2] + a.x * x[0])
 }
 
 /// `P(a)ᵀ f` for a wrench `f`: `(a × f, f)`.
 #[inline]
-fn project_wrench(a: Vec2, f: &Vector3<Real>) -> Vector3<Real> {
+#[doc(hidden)]
+pub fn project_wrench(a: Vec2, f: &Vector3<Real>) -> Vector3<Real> {
     Vector3::new(a.x * f[2] - a.y * f[1], f[1], f[2])
 }
 
@@ -339,28 +344,5 @@ impl ArticulatedFactor {
     pub fn solve_factor_transpose_in_place(&mut self, y: &mut [Real]) {
         self.scale_c_inverse_transpose(y);
         self.forward(y);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn matrices_act_as_the_spatial_operations() {
-        let inertia = Inertia::from_body(1.3, Vec2::new(0.4, -0.7), 0.21);
-        let s = Twist::new(0.9, Vec2::new(-1.1, 0.35));
-        let f = inertia.mul_twist(&s);
-        let fm = inertia_matrix(&inertia) * twist_vector(&s);
-        assert!((fm - Vector3::new(f.n, f.f.x, f.f.y)).amax() < 1e-15);
-        let a = Vec2::new(-0.3, 1.7);
-        let p = s.projected_at(a);
-        let pm = projection_matrix(a) * twist_vector(&s);
-        assert!((pm - twist_vector(&p)).amax() < 1e-15);
-        assert!((project_twist(a, &twist_vector(&s)) - pm).amax() < 1e-15);
-        let fv = Vector3::new(f.n, f.f.x, f.f.y);
-        let pf = f.projected_at(a);
-        assert!((project_wrench(a, &fv) - Vector3::new(pf.n, pf.f.x, pf.f.y)).amax() < 1e-15);
-        assert!((projection_matrix(a).transpose() * fv - project_wrench(a, &fv)).amax() < 1e-15);
     }
 }

@@ -366,7 +366,8 @@ impl MassFactor {
 /// `(−L₁₀) L₁₀` to `m11`, the same number as the subtraction), so its bits: the recorded
 /// runs of `kane_double_pendulum` depend on them (test
 /// `the_2x2_cholesky_is_nalgebras_to_the_bit`).
-fn cholesky_2x2(m00: Real, m10: Real, m11: Real) -> Option<[Real; 3]> {
+#[doc(hidden)]
+pub fn cholesky_2x2(m00: Real, m10: Real, m11: Real) -> Option<[Real; 3]> {
     // nalgebra's test: the pivot is not zero and `try_sqrt` takes it (`≥ 0`, not NaN),
     // that is `> 0`.
     let pivot_ok = |v: Real| v > 0.0;
@@ -438,7 +439,8 @@ fn solve_2x2(data: &mut Data, t: Real, tau: Option<&[Real]>) -> Option<Result<()
 
 /// `b ← L⁻¹ b` for the `2 × 2` factor `l = [L₀₀, L₁₀, L₁₁]`, forward, as nalgebra's
 /// `solve_lower_triangular_unchecked_mut`: `y₀ = b₀ / L₀₀`, `y₁ = (b₁ − y₀ L₁₀) / L₁₁`.
-fn solve_lower_2x2(l: &[Real; 3], b: &mut [Real]) {
+#[doc(hidden)]
+pub fn solve_lower_2x2(l: &[Real; 3], b: &mut [Real]) {
     let y0 = b[0] / l[0];
     b[0] = y0;
     b[1] = (b[1] - y0 * l[1]) / l[2];
@@ -447,7 +449,8 @@ fn solve_lower_2x2(l: &[Real; 3], b: &mut [Real]) {
 /// `y ← L⁻ᵀ y` for the `2 × 2` factor `l = [L₀₀, L₁₀, L₁₁]`, backward, as nalgebra's
 /// `ad_solve_lower_triangular_unchecked_mut`: `x₁ = y₁ / L₁₁`, `x₀ = (y₀ − (0 + L₁₀ x₁)) /
 /// L₀₀` (its dot product starts from `+0`, which turns a `−0` product into `+0`).
-fn solve_upper_2x2(l: &[Real; 3], y: &mut [Real]) {
+#[doc(hidden)]
+pub fn solve_upper_2x2(l: &[Real; 3], y: &mut [Real]) {
     let x1 = y[1] / l[2];
     y[1] = x1;
     let dot = 0.0 + l[1] * x1;
@@ -1474,140 +1477,5 @@ fn check_finite(t: Real, what: &'static str, v: &[Real]) -> Result<(), DynamicsE
             index,
             value: v[index],
         }),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Where [`has_power`] says a model's dampers, efforts and drives have no power, [`power`]
-    /// is `+0` in each component, bit for bit, at random states of every bundled scene (so
-    /// the right-hand side may take [`Power::default`] instead); and at least one scene
-    /// has power and two have none.
-    #[test]
-    fn no_power_is_plus_zero_to_the_bit() {
-        let mut rng = crate::linalg::tests::Lcg(27);
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-        let (mut with, mut without, mut checked) = (0, 0, 0);
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.extension().is_none_or(|e| e != "toml") {
-                continue;
-            }
-            let scene = crate::scene::load(&path).unwrap();
-            let model = &scene.model;
-            if has_power(model) {
-                with += 1;
-                continue;
-            }
-            without += 1;
-            let mut data = Data::new(model);
-            let (q0, u0) = (&scene.initial.q, &scene.initial.u);
-            for k in 0..200 {
-                let q: Vec<Real> = q0.iter().map(|x| x + 0.5 * rng.next()).collect();
-                // Speeds of both signs, exact zeros of both signs among them.
-                let u: Vec<Real> = (0..u0.len())
-                    .map(|i| match (k + i) % 7 {
-                        0 => 0.0,
-                        1 => -0.0,
-                        _ => 5.0 * rng.next(),
-                    })
-                    .collect();
-                let t = 0.01 * k as Real;
-                if forward_dynamics(model, &mut data, t, &q, &u).is_err() {
-                    continue;
-                }
-                let p = power(model, &mut data);
-                let bits = [p.damping, p.applied, p.drives].map(Real::to_bits);
-                assert_eq!(
-                    bits,
-                    [(0.0 as Real).to_bits(); 3],
-                    "{}: {p:?}",
-                    path.display()
-                );
-                checked += 1;
-            }
-        }
-        assert!(
-            checked >= 150 * without,
-            "{checked} states of {without} scenes"
-        );
-        assert!(
-            with >= 1 && without >= 2,
-            "{with} scenes with power, {without} without"
-        );
-    }
-
-    use crate::linalg::tests::Lcg;
-
-    fn same_bits(a: &[Real], b: &[Real]) -> bool {
-        a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-    }
-
-    /// [`cholesky_2x2`] and its solves give nalgebra's dense [`Cholesky`] numbers to the
-    /// bit: the factor, `L⁻¹ b`, `L⁻ᵀ b` and `M⁻¹ b`, on random symmetric positive definite
-    /// matrices of spread scales and conditioning (`A Aᵀ + δ I`), right-hand sides with
-    /// zeros of both signs, and the same failures on matrices that are not positive definite
-    /// (zero, negative and NaN pivots).
-    #[test]
-    fn the_2x2_cholesky_is_nalgebras_to_the_bit() {
-        let mut rng = Lcg(16);
-        let mut factored = 0;
-        for case in 0..200_000 {
-            let scale = 10f64.powi((case % 17) as i32 - 8);
-            let (a, b, c, d) = (rng.next(), rng.next(), rng.next(), rng.next());
-            let delta = 10f64.powi(-((case % 15) as i32));
-            let mut m = [
-                (a * a + b * b + delta) * scale,
-                (a * c + b * d) * scale,
-                (c * c + d * d + delta) * scale,
-            ];
-            match case % 11 {
-                // Singular or indefinite, and non-finite.
-                1 => m[2] = m[1] * m[1] / m[0],
-                2 => m[0] = 0.0,
-                3 => m[2] = -m[2],
-                4 => m[case % 3] = Real::NAN,
-                5 => m[0] = -0.0,
-                _ => {}
-            }
-            let mut rhs = [rng.next() * scale, rng.next()];
-            match case % 7 {
-                1 => rhs = [0.0, -0.0],
-                2 => rhs[0] = -0.0,
-                3 => rhs[1] = 0.0,
-                4 => rhs = [-0.0, 0.0],
-                5 => rhs = [-0.0, -0.0],
-                _ => {}
-            }
-            let dense = DMatrix::from_row_slice(2, 2, &[m[0], m[1], m[1], m[2]]);
-            let fast = cholesky_2x2(m[0], m[1], m[2]);
-            let slow = Cholesky::new(dense.clone());
-            assert_eq!(fast.is_some(), slow.is_some(), "{dense}");
-            let (Some(l), Some(chol)) = (fast, slow) else {
-                continue;
-            };
-            factored += 1;
-            let lc = chol.l_dirty();
-            assert!(
-                same_bits(&l, &[lc[(0, 0)], lc[(1, 0)], lc[(1, 1)]]),
-                "{dense}: {l:?} vs {lc}"
-            );
-            let (mut x, mut y) = (rhs, rhs);
-            solve_lower_2x2(&l, &mut x);
-            lc.solve_lower_triangular_unchecked_mut(&mut DVectorViewMut::from_slice(&mut y, 2));
-            assert!(same_bits(&x, &y), "{dense} {rhs:?}: {x:?} vs {y:?}");
-            let (mut x, mut y) = (rhs, rhs);
-            solve_upper_2x2(&l, &mut x);
-            lc.ad_solve_lower_triangular_unchecked_mut(&mut DVectorViewMut::from_slice(&mut y, 2));
-            assert!(same_bits(&x, &y), "{dense} {rhs:?}: {x:?} vs {y:?}");
-            let (mut x, mut y) = (rhs, rhs);
-            solve_lower_2x2(&l, &mut x);
-            solve_upper_2x2(&l, &mut x);
-            chol.solve_mut(&mut DVectorViewMut::from_slice(&mut y, 2));
-            assert!(same_bits(&x, &y), "{dense} {rhs:?}: {x:?} vs {y:?}");
-        }
-        assert!(factored > 100_000, "only {factored} matrices factored");
     }
 }

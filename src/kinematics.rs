@@ -99,11 +99,8 @@ pub struct PointVelocity {
     pub remainder: Vec2,
 }
 
-pub(crate) fn check_len(
-    what: &'static str,
-    expected: usize,
-    got: usize,
-) -> Result<(), KinematicsError> {
+#[doc(hidden)]
+pub fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), KinematicsError> {
     if expected == got {
         Ok(())
     } else {
@@ -175,7 +172,8 @@ pub fn update_positions(
 
 /// What [`update_positions`] computes for one joint and its body.
 #[derive(Clone, Copy)]
-pub(crate) struct JointPlacement {
+#[doc(hidden)]
+pub struct JointPlacement {
     /// The joint coordinates (the drive's at `t` for a prescribed joint).
     pub q: [Real; 3],
     /// The prescribed accelerations (zero for a free joint).
@@ -198,7 +196,8 @@ pub(crate) struct JointPlacement {
 /// [`crate::dynamics::forward_dynamics_with`] so that both compute the same numbers. The
 /// kind is passed by value so that a caller that knows it gets the code of that kind alone.
 #[inline(always)]
-pub(crate) fn place_joint(
+#[doc(hidden)]
+pub fn place_joint(
     model: &Model,
     (i, joint, kind): (usize, &Joint, JointKind),
     body: &Body,
@@ -365,7 +364,8 @@ pub(crate) fn tree_velocities(model: &Model, data: &mut Data, v_tree: &[Real]) {
 
 /// What [`update_velocities`] computes for one joint and its body.
 #[derive(Clone, Copy)]
-pub(crate) struct JointMotion {
+#[doc(hidden)]
+pub struct JointMotion {
     /// The joint rates (the drive's at `t` for a prescribed joint).
     pub qd: [Real; 3],
     /// The body twist `V_b`.
@@ -383,7 +383,8 @@ pub(crate) struct JointMotion {
 /// [module documentation](self) for the recursion). One step of [`tree_velocities`],
 /// shared with the fused pass of [`crate::dynamics::forward_dynamics_with`].
 #[inline(always)]
-pub(crate) fn move_joint(
+#[doc(hidden)]
+pub fn move_joint(
     model: &Model,
     (i, joint, kind): (usize, &Joint, JointKind),
     t: Real,

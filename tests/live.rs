@@ -313,3 +313,49 @@ fn a_port_in_use_is_an_error_naming_the_address_and_leaves_no_log() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("speed"));
     assert!(!log.exists());
 }
+
+/// The unit tests of `log::live` (`src/log/live.rs`), moved out of the library with the
+/// others (tests/all/unit) but kept here, where the feature `live` is on.
+mod unit {
+    use std::time::{Duration, Instant};
+
+    use ricochet::log::LogError;
+    use ricochet::log::live::*;
+
+    #[test]
+    fn pacing_waits_until_the_simulated_time_is_due() {
+        let start = Instant::now();
+        let pace = Pace {
+            start,
+            t0: 2.0,
+            speed: 4.0,
+        };
+        // t = 3 s is due 0.25 s after the start at 4× real time.
+        assert_eq!(pace.wait(3.0, start), Duration::from_millis(250));
+        assert_eq!(
+            pace.wait(3.0, start + Duration::from_millis(100)),
+            Duration::from_millis(150)
+        );
+        // Behind: no wait.
+        assert_eq!(
+            pace.wait(3.0, start + Duration::from_secs(1)),
+            Duration::ZERO
+        );
+        assert_eq!(pace.wait(2.0, start), Duration::ZERO);
+    }
+
+    #[test]
+    fn a_bad_speed_is_refused() {
+        for speed in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let options = LiveOptions {
+                speed,
+                port: 0,
+                ..LiveOptions::default()
+            };
+            assert!(matches!(
+                LiveView::start(&options),
+                Err(LogError::Live { .. })
+            ));
+        }
+    }
+}

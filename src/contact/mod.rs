@@ -10,9 +10,12 @@
 
 pub mod broad;
 mod frame;
-mod gap;
-mod manifold;
-mod penetration;
+#[doc(hidden)]
+pub mod gap;
+#[doc(hidden)]
+pub mod manifold;
+#[doc(hidden)]
+pub mod penetration;
 pub mod query;
 
 pub use frame::{
@@ -24,6 +27,3 @@ pub use manifold::{
     ClosedVertex, ContactPoints, MAX_CONTACT_POINTS, ManifoldWorkspace, contact_points,
     contact_points_of, is_plane_pair,
 };
-
-#[cfg(test)]
-pub(crate) use manifold::tests as manifold_tests;

@@ -840,7 +840,8 @@ fn classify<L: LastStep, G: EventFunctions>(
 /// of the sampling.) Without it, every pair of a many-body scene with a minimum of its
 /// gap inside a sample interval, however far apart, was searched to the time tolerance
 /// at every step: a cost of ~N⁴ per step for N bodies.
-fn cannot_dip(g_a: Real, gd_a: Real, g_b: Real, gd_b: Real, h: Real) -> bool {
+#[doc(hidden)]
+pub fn cannot_dip(g_a: Real, gd_a: Real, g_b: Real, gd_b: Real, h: Real) -> bool {
     (g_a + 2.0 * gd_a * h).max(g_b - 2.0 * gd_b * h) > 0.0
 }
 
@@ -936,36 +937,4 @@ fn extremum<L: LastStep, G: EventFunctions>(
             Found::Extremum(lo, hi)
         }
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::cannot_dip;
-
-    /// A convex parabola `g = c + k (t − s)²` whose minimum `c` lies inside `[0, h]`: the
-    /// search is skipped only if `c > 0` (never when it dips to zero or below), and it
-    /// is skipped when the minimum is far from zero.
-    #[test]
-    fn a_convex_dip_is_never_skipped() {
-        let h = 1e-3;
-        for ks in 1..=40 {
-            let k = 10f64.powf(ks as f64 / 4.0 - 3.0);
-            for ss in 1..20 {
-                let s = h * ss as f64 / 20.0;
-                for cs in -30..=30 {
-                    let c = k * h * h * cs as f64 / 10.0;
-                    let (g, gd) = (|t: f64| c + k * (t - s).powi(2), |t: f64| 2.0 * k * (t - s));
-                    let (ga, gb, gda, gdb) = (g(0.0), g(h), gd(0.0), gd(h));
-                    if ga <= 0.0 || gb <= 0.0 {
-                        continue;
-                    }
-                    let skip = cannot_dip(ga, gda, gb, gdb, h);
-                    assert!(!skip || c > 0.0, "k {k}, s {s}, c {c}: a dip skipped");
-                    if c > 4.0 * k * h * h {
-                        assert!(skip, "k {k}, s {s}, c {c}: a far minimum searched");
-                    }
-                }
-            }
-        }
-    }
 }

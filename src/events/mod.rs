@@ -82,10 +82,13 @@ use std::convert::Infallible;
 use crate::integrate::IntegrateError;
 use crate::math::Real;
 
-mod bound;
+#[doc(hidden)]
+pub mod bound;
 mod function;
-mod illinois;
-mod locate;
+#[doc(hidden)]
+pub mod illinois;
+#[doc(hidden)]
+pub mod locate;
 mod settle;
 
 pub use bound::closing_time_bound;

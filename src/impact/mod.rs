@@ -30,17 +30,21 @@
 //! # Ok::<(), impact::ImpactError>(())
 //! ```
 
-mod coefficients;
-#[cfg(test)]
-mod double_double;
+#[doc(hidden)]
+pub mod coefficients;
 pub mod kane_levinson;
 pub mod newton;
-mod outcome;
-mod path;
+#[doc(hidden)]
+pub mod outcome;
+#[doc(hidden)]
+pub mod path;
 mod poisson;
-mod problem;
-mod scale;
-mod stronge;
+#[doc(hidden)]
+pub mod problem;
+#[doc(hidden)]
+pub mod scale;
+#[doc(hidden)]
+pub mod stronge;
 
 pub use coefficients::{Coefficients, SignCase};
 pub use outcome::{CollisionType, Outcome, energy_change};
@@ -226,7 +230,8 @@ fn solve_in_general(law: Law, problem: &ImpactProblem) -> Result<Outcome, Impact
 /// The problem in the paper's frame, `t` oriented so that `v_t^A ≥ 0` [P, Eq. (10)]: for
 /// `v_t^A < 0`, `m_nt → −m_nt` and `v_t^A → −v_t^A`; and whether it was mirrored.
 #[inline(always)]
-fn paper_frame(problem: &ImpactProblem) -> (ImpactProblem, bool) {
+#[doc(hidden)]
+pub fn paper_frame(problem: &ImpactProblem) -> (ImpactProblem, bool) {
     // A product by ±1 is exact: −m_nt and −v_t^A when mirrored, the same numbers otherwise.
     let mirrored = problem.v_a.t < 0.0;
     let sign = if mirrored { -1.0 } else { 1.0 };
@@ -240,7 +245,8 @@ fn paper_frame(problem: &ImpactProblem) -> (ImpactProblem, bool) {
 
 /// The law's solution of a problem in the paper's frame.
 #[inline(always)]
-fn apply(law: Law, pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
+#[doc(hidden)]
+pub fn apply(law: Law, pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawSolution {
     match law {
         Law::Newton => newton::solve(pb, c, case),
         Law::KaneLevinson => kane_levinson::solve(pb, c),
@@ -252,7 +258,8 @@ fn apply(law: Law, pb: &ImpactProblem, c: &Coefficients, case: SignCase) -> LawS
 /// [`solve`] for a valid problem whose `W` and `v^A` have their largest entries in
 /// `[1, 2)`.
 #[inline(never)]
-fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
+#[doc(hidden)]
+pub fn solve_at_order_one(law: Law, problem: &ImpactProblem) -> Result<Outcome, ImpactError> {
     let (pb, mirrored) = paper_frame(problem);
     let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
     let case = c.sign_case();
@@ -333,7 +340,8 @@ fn is_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
 /// infinite or NaN, so that the checks fail with any tolerance. Every check that holds for
 /// a tolerance holds for a larger one.
 #[inline(always)]
-fn is_clearly_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
+#[doc(hidden)]
+pub fn is_clearly_coherent(pb: &ImpactProblem, sol: &LawSolution) -> bool {
     let (i, v_s, v_a, w) = (sol.impulse, sol.v_s, pb.v_a, &pb.w);
     let tol = COHERENCE_TOL * (v_a.n.abs() + v_a.t.abs());
     let wi = w.apply(i);

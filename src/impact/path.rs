@@ -333,20 +333,23 @@ impl RouthPath {
 
     /// `dv_n/dĨ_n` of the first phase, forward sliding: `h`.
     #[inline(always)]
-    pub(super) fn slide_dv_n(&self) -> Real {
+    #[doc(hidden)]
+    pub fn slide_dv_n(&self) -> Real {
         self.slide.dv_n
     }
 
     /// `dv_n/dĨ_n` of the phase after G: `q` (reverse sliding), `Δ/m_tt` (sticking), or
     /// `m_nn` (sticking with `m_tt = 0`).
     #[inline(always)]
-    pub(super) fn after_dv_n(&self) -> Real {
+    #[doc(hidden)]
+    pub fn after_dv_n(&self) -> Real {
         self.after_slope.dv_n
     }
 
     /// The point G (meaningful when [`i_g`](Self::i_g) is finite).
     #[inline(always)]
-    pub(super) fn at_g(&self) -> &PathPoint {
+    #[doc(hidden)]
+    pub fn at_g(&self) -> &PathPoint {
         &self.at_g
     }
 
@@ -404,7 +407,8 @@ impl RouthPath {
     /// (`+0` against `−0`), a quotient `±0` that passes `x ≥ 0` and adds nothing to
     /// `Ĩ_n(G)`, which is never `−0` (`0`, `v_t^A/g` with both positive, or `+∞`).
     #[inline(always)]
-    pub(super) fn end_of_compression(&self) -> Option<Real> {
+    #[doc(hidden)]
+    pub fn end_of_compression(&self) -> Option<Real> {
         debug_assert!(self.origin.v.n < 0.0, "the contact approaches");
         if self.slide.dv_n > 0.0 {
             let x = -self.origin.v.n / self.slide.dv_n;
@@ -470,7 +474,8 @@ impl RouthPath {
 /// The root `x ≥ 0` of `v0 x + ½ s x² = r` for `r ≥ 0` on a rising branch, in the form
 /// without cancellation; `None` if there is none.
 #[inline(always)]
-pub(super) fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
+#[doc(hidden)]
+pub fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
     if r <= 0.0 {
         return Some(0.0);
     }
@@ -480,69 +485,4 @@ pub(super) fn rising_root(v0: Real, s: Real, r: Real) -> Option<Real> {
     }
     let den = v0 + disc.sqrt();
     (den > 0.0).then(|| 2.0 * r / den)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rising_root_solves_the_quadratic() {
-        for &(v0, s, r) in &[
-            (1.0, 2.0, 3.0),
-            (0.0, 2.0, 1.0),
-            (2.0, 0.0, 1.0),
-            (1e-9, 4.0, 2.0),
-        ] {
-            let x = rising_root(v0, s, r).unwrap();
-            assert!((v0 * x + 0.5 * s * x * x - r).abs() <= 1e-14 * r.max(1.0));
-        }
-        assert_eq!(rising_root(0.0, 0.0, 0.0), Some(0.0));
-        assert_eq!(rising_root(0.0, 0.0, 1.0), None);
-    }
-
-    /// `end_of_compression` is `reach_normal_velocity(0)` bit for bit, on random paths of
-    /// every kind (singular W, zero slip, v_n(G) = ±0 by construction among them).
-    #[test]
-    fn end_of_compression_is_reach_normal_velocity_at_zero() {
-        let mut u = crate::math::uniform_numbers(0x9e37_79b9_7f4a_7c15);
-        let mut at_g_zero = 0;
-        for k in 0..200_000 {
-            let (a, b, d) = (u() * 2.0 - 1.0, u() * 2.0 - 1.0, u());
-            let d = if k % 7 == 0 { 0.0 } else { d };
-            let w = ImpactMatrix::new(a * a + 1e-3, a * b, b * b + d * d);
-            let mu = [0.0, 0.3, u() * 2.0][k % 3];
-            let vt = if k % 11 == 0 { 0.0 } else { u() };
-            // Every fifth problem: v_n^A = −h Ĩ_n(G), so that v_n(G) rounds to ±0 or near.
-            let c = Coefficients::new(&w, mu, ContactVelocity::new(-1.0, vt));
-            let vn = if k % 5 == 0 && c.g > 0.0 && c.h > 0.0 && vt > 0.0 {
-                -(c.h * (vt / c.g))
-            } else {
-                -(u() + 1e-3)
-            };
-            if vn >= 0.0 {
-                continue;
-            }
-            let path = RouthPath::new(&w, mu, ContactVelocity::new(vn, vt));
-            at_g_zero += usize::from(path.at_g().v.n == 0.0);
-            let (a, b) = (path.end_of_compression(), path.reach_normal_velocity(0.0));
-            assert_eq!(
-                a.map(Real::to_bits),
-                b.map(Real::to_bits),
-                "{w:?} {mu} {vn} {vt}"
-            );
-        }
-        assert!(at_g_zero > 100, "{at_g_zero}");
-    }
-
-    #[test]
-    fn path_is_continuous_at_g() {
-        let w = ImpactMatrix::new(0.34, -0.51, 0.81);
-        let path = RouthPath::new(&w, 0.5, ContactVelocity::new(-0.27, 0.53));
-        let ig = path.i_g();
-        let (a, b) = (path.at(ig * (1.0 - 1e-12)), path.at(ig * (1.0 + 1e-12)));
-        assert!((a.v.n - b.v.n).abs() < 1e-12);
-        assert!((a.i.t - b.i.t).abs() < 1e-12);
-        assert!((a.work_n - b.work_n).abs() < 1e-12);
-    }
 }

@@ -249,7 +249,8 @@ impl ImpactProblem {
     /// computes on the way and the problem brought to order one with them
     /// ([`Scale::down`]), which the solver solves.
     #[inline(always)]
-    pub(super) fn at_order_one(&self) -> Result<(Scale, ImpactProblem), ImpactError> {
+    #[doc(hidden)]
+    pub fn at_order_one(&self) -> Result<(Scale, ImpactProblem), ImpactError> {
         // The magnitudes as bit patterns, which order like the numbers: the largest of all
         // is infinite or NaN exactly when an input is not finite.
         let (w, v) = (&self.w, self.v_a);
@@ -291,8 +292,8 @@ impl ImpactProblem {
     /// ([`at_order_one`](Self::at_order_one) tells which error). Kept for the tests, as
     /// the oracle of [`at_moderate_scale_in_paper_frame`](Self::at_moderate_scale_in_paper_frame),
     /// which [`solve`](super::solve) takes.
-    #[cfg(test)]
-    pub(super) fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
+    #[doc(hidden)]
+    pub fn at_moderate_scale(&self) -> Option<(Factors, ImpactProblem)> {
         // The exponents of the largest magnitudes, from their bits (0 and subnormals,
         // infinities and NaN fall outside ±340).
         let (w, v) = (&self.w, self.v_a);
@@ -322,9 +323,8 @@ impl ImpactProblem {
     /// `v_t^A · 2^-b` underflows to −0 (then the scaled number is not mirrored): those
     /// problems are declined (`None`), and the general path solves them as before.
     #[inline(always)]
-    pub(super) fn at_moderate_scale_in_paper_frame(
-        &self,
-    ) -> Option<(Factors, ImpactProblem, bool)> {
+    #[doc(hidden)]
+    pub fn at_moderate_scale_in_paper_frame(&self) -> Option<(Factors, ImpactProblem, bool)> {
         let (w, v) = (&self.w, self.v_a);
         let w_max = magnitude(w.nn).max(magnitude(w.nt)).max(magnitude(w.tt));
         let v_max = magnitude(v.n).max(magnitude(v.t));

@@ -37,7 +37,8 @@ use crate::math::Real;
 
 /// The powers of two `s = 2^w` and `c = 2^v` of a problem's `W` and `v^A`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Scale {
+#[doc(hidden)]
+pub struct Scale {
     /// `log2 s`.
     w: i32,
     /// `log2 c`.
@@ -70,8 +71,8 @@ impl Scale {
 
     /// [`Scale::down`] of [`Scale::matrix_down`] at moderate scales: the same products by
     /// `2^-log2 s` and `2^-log2 c` (normal doubles), without [`ldexp`]'s test of the range.
-    #[cfg(test)]
-    pub(super) fn down_moderate(&self, pb: &ImpactProblem) -> ImpactProblem {
+    #[doc(hidden)]
+    pub fn down_moderate(&self, pb: &ImpactProblem) -> ImpactProblem {
         let (s, c) = (pow2(-self.w), pow2(-self.v));
         let w = &pb.w;
         ImpactProblem {
@@ -220,7 +221,8 @@ impl Scale {
     /// caller's scales; an error if a number of it is beyond the range of doubles. (The
     /// general path; [`Factors::outcome`] is the usual one.)
     #[inline(never)]
-    pub(super) fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
+    #[doc(hidden)]
+    pub fn up(&self, mut out: Outcome) -> Result<Outcome, ImpactError> {
         let k = self.exponents();
         // Checked at order one: which number leaves the range, and by how much.
         if let Some((what, x, e)) = beyond_range(&out, &k) {
@@ -243,7 +245,8 @@ impl Scale {
 
 /// How each kind of quantity of an answer at order one is brought back to the caller's
 /// scales (see the module's table).
-pub(super) trait Rescale {
+#[doc(hidden)]
+pub trait Rescale {
     /// An impulse: times `c/s`.
     fn impulse(&self, x: Real) -> Real;
     /// A velocity: times `c`.
@@ -282,7 +285,8 @@ impl Rescale for Exponents {
 /// The powers of two of [`Exponents`] as numbers, each a normal double: a product by one
 /// of them is exact unless it over- or underflows, and equals [`ldexp`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Factors {
+#[doc(hidden)]
+pub struct Factors {
     impulse: Real,
     velocity: Real,
     work: Real,
@@ -324,7 +328,8 @@ impl Factors {
     /// component times `2^k`: bit for bit [`Scale::up`] (with its [`ldexp`]) of the
     /// mirrored solution, where [`keep_in_range`](Self::keep_in_range) holds.
     #[inline(always)]
-    pub(super) fn outcome(
+    #[doc(hidden)]
+    pub fn outcome(
         &self,
         law: Law,
         case: SignCase,
@@ -367,7 +372,8 @@ impl Factors {
     /// `limit`, so that the check does not wait for the products (their magnitudes are
     /// the same in either frame); g, h, p, q stay finite at moderate scales.
     #[inline(always)]
-    pub(super) fn keep_in_range(&self, sol: &LawSolution, delta_e: Real) -> bool {
+    #[doc(hidden)]
+    pub fn keep_in_range(&self, sol: &LawSolution, delta_e: Real) -> bool {
         // The last phase ends at the impulse with the works, so the end of the first phase
         // stands for the phases.
         let i = sol.impulse;
@@ -446,7 +452,8 @@ const MODERATE: u32 = 340;
 /// The exponent `k` of a finite `x ≠ 0`: `2^k ≤ |x| < 2^(k+1)` (subnormals included); 0
 /// for 0 and non-finite `x`.
 #[inline(always)]
-pub(crate) fn exponent(x: Real) -> i32 {
+#[doc(hidden)]
+pub fn exponent(x: Real) -> i32 {
     if x == 0.0 || !x.is_finite() {
         return 0;
     }
@@ -481,7 +488,8 @@ fn exponent_of_subnormal(x: Real) -> i32 {
 /// `x · 2^k`, exact unless the result is subnormal (then rounded, at most twice) or beyond
 /// the range of doubles (then infinite).
 #[inline(always)]
-pub(crate) fn ldexp(x: Real, k: i32) -> Real {
+#[doc(hidden)]
+pub fn ldexp(x: Real, k: i32) -> Real {
     if (-1022..=1023).contains(&k) {
         x * pow2(k)
     } else {
@@ -505,272 +513,8 @@ fn ldexp_far(mut x: Real, mut k: i32) -> Real {
 
 /// `2^k` for `k ∈ [−1022, 1023]`, from its bits.
 #[inline(always)]
-fn pow2(k: i32) -> Real {
+#[doc(hidden)]
+pub fn pow2(k: i32) -> Real {
     debug_assert!((-1022..=1023).contains(&k));
     Real::from_bits(((k + 1023) as u64) << 52)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::impact::{
-        Law, apply, energy_change, is_clearly_coherent, paper_frame, solve_at_order_one,
-    };
-
-    /// The one pass of [`solve`](crate::impact::solve) (the law at order one, then a
-    /// product by each power of two, [`Factors::outcome`]) gives the general path's answer
-    /// ([`solve_at_order_one`], then [`ldexp`] after [`beyond_range`]) bit for bit, and
-    /// declines, beyond the general path's errors and the scales beyond `2^±340`, less
-    /// than once in a thousand. Random problems over the whole range of scales
-    /// (`W = L Lᵀ`, singular one time in seven), every law.
-    #[test]
-    fn one_pass_is_the_general_path() {
-        let mut rnd = crate::math::uniform_numbers(0x2545_F491_4F6C_DD1D);
-        let one_pass = |law: Law, pb: &ImpactProblem| {
-            let (f, unit) = pb.at_moderate_scale()?;
-            assert_eq!(Ok(unit), pb.at_order_one().map(|(_, unit)| unit));
-            // The mirror folded into the powers of two: the same bits (Debug tells −0
-            // from 0), declined only where v_t^A · 2^-b underflows.
-            let Some((_, folded, folded_mirrored)) = pb.at_moderate_scale_in_paper_frame() else {
-                assert!(unit.v_a.t == 0.0 && pb.v_a.t != 0.0, "{pb:?}");
-                return None;
-            };
-            let (pb, mirrored) = paper_frame(&unit);
-            assert_eq!(
-                format!("{:?}", (folded, folded_mirrored)),
-                format!("{:?}", (pb, mirrored))
-            );
-            let c = Coefficients::new(&pb.w, pb.mu, pb.v_a);
-            let case = c.sign_case();
-            let sol = apply(law, &pb, &c, case);
-            let delta_e = energy_change(sol.impulse, pb.v_a, sol.v_s);
-            if sol.failure.is_some() || !is_clearly_coherent(&pb, &sol) {
-                return None;
-            }
-            (f.keep_in_range(&sol, delta_e))
-                .then(|| f.outcome(law, case, &c, &sol, delta_e, mirrored))
-        };
-        let (mut in_place, mut declined, mut errors, mut needless) = (0, 0, 0, 0);
-        for k in 0..20_000 {
-            let far = |r: Real| pow2((r * 2000.0 - 1000.0) as i32);
-            let s = if k % 4 == 0 {
-                far(rnd())
-            } else {
-                rnd() * 8.0 + 0.1
-            };
-            let c = if k % 4 == 1 {
-                far(rnd())
-            } else {
-                rnd() * 8.0 + 0.1
-            };
-            let (a, b, d) = (rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd());
-            let d = if k % 7 == 0 { 0.0 } else { d };
-            let w = ImpactMatrix::new(s * a * a, s * a * b, s * (b * b + d * d));
-            let v_a = ContactVelocity::new(-c * (rnd() + 1e-3), c * (rnd() * 2.0 - 1.0));
-            let pb = ImpactProblem::new(w, v_a, rnd(), rnd() * 2.0);
-            let Ok((scale, unit)) = pb.at_order_one() else {
-                continue;
-            };
-            for law in Law::ALL {
-                let Ok(out) = solve_at_order_one(law, &unit) else {
-                    assert_eq!(one_pass(law, &pb), None);
-                    continue;
-                };
-                let general = scale.up(out);
-                if let Some(fast) = one_pass(law, &pb) {
-                    in_place += 1;
-                    // Debug prints every double exactly (and −0 apart from 0).
-                    assert_eq!(
-                        format!("{general:?}"),
-                        format!("{:?}", Ok::<_, ImpactError>(fast))
-                    );
-                } else {
-                    // Declined: extreme scales, an error of the general path, or (rarely)
-                    // a solution not clearly coherent or near the range's limit.
-                    declined += 1;
-                    let beyond_moderate = pb.at_moderate_scale().is_none();
-                    errors += usize::from(general.is_err());
-                    needless += usize::from(general.is_ok() && !beyond_moderate);
-                }
-            }
-        }
-        assert!(in_place > 40_000, "{in_place}");
-        assert!(errors > 100 && declined > errors, "{declined} {errors}");
-        assert!(needless * 1000 < in_place, "{needless} of {in_place}");
-
-        // I_n > 0 that the one pass brings to 0 while its scales are moderate:
-        // W ≈ 2^340, v_t^A = 2^-340, v_n^A = −2^-740 (I_n ≈ 2^-400 · 2^-680 at order one).
-        let w = ImpactMatrix::new(pow2(340), pow2(337), pow2(340));
-        let pb = ImpactProblem::new(w, ContactVelocity::new(-pow2(-740), pow2(-340)), 0.5, 0.3);
-        let (scale, unit) = pb.at_order_one().unwrap();
-        assert!(pb.at_moderate_scale().is_some());
-        for law in Law::ALL {
-            let out = solve_at_order_one(law, &unit).unwrap();
-            assert!(out.impulse.n > 0.0);
-            assert_eq!(one_pass(law, &pb), None, "{law}");
-            assert!(
-                matches!(
-                    scale.up(out),
-                    Err(ImpactError::OutOfRange { what: "I_n", .. })
-                ),
-                "{law}"
-            );
-        }
-    }
-
-    /// `v_t^A < 0` whose scaled number underflows to −0: the problem at order one is not
-    /// mirrored (its `v_t^A` is not negative), so the one pass, which decides the mirror
-    /// on the caller's `v_t^A`, declines it, and `solve` gives the general path's answer.
-    #[test]
-    fn an_underflowing_tangential_velocity_is_not_mirrored() {
-        let w = ImpactMatrix::new(1.0, 0.2, 2.0);
-        let pb = ImpactProblem::new(w, ContactVelocity::new(-pow2(100), -1e-320), 0.5, 0.3);
-        let (scale, unit) = pb.at_order_one().unwrap();
-        assert_eq!(unit.v_a.t.to_bits(), (-0.0 as Real).to_bits());
-        assert!(pb.at_moderate_scale().is_some());
-        assert!(pb.at_moderate_scale_in_paper_frame().is_none());
-        for law in Law::ALL {
-            let general = scale.up(solve_at_order_one(law, &unit).unwrap());
-            let out = crate::impact::solve(law, &pb);
-            assert!(!out.as_ref().unwrap().mirrored, "{law}");
-            assert_eq!(format!("{out:?}"), format!("{general:?}"), "{law}");
-        }
-    }
-
-    #[test]
-    fn exponent_and_ldexp_are_exact() {
-        for (x, k) in [
-            (1.0, 0),
-            (1.5, 0),
-            (2.0, 1),
-            (0.75, -1),
-            (Real::MAX, 1023),
-            (Real::MIN_POSITIVE, -1022),
-            (5e-324, -1074),
-            (-3e-310, -1029),
-        ] {
-            assert_eq!(exponent(x), k, "{x}");
-            let m = ldexp(x, -k);
-            assert!((1.0..2.0).contains(&m.abs()), "{x} → {m}");
-            assert_eq!(ldexp(m, k), x, "{x}");
-        }
-        assert_eq!(ldexp(1.0, 1024), Real::INFINITY);
-        assert_eq!(ldexp(1.0, -1074), 5e-324);
-        assert_eq!(ldexp(1.0, -1076), 0.0);
-        assert_eq!(ldexp(1.5, -2000), 0.0);
-        assert_eq!(ldexp(1.5, 2000), Real::INFINITY);
-        assert_eq!(ldexp(ldexp(1.5, 1000), -2000), ldexp(1.5, -1000));
-    }
-
-    /// A subnormal entry of `W` in the caller's data, left subnormal at order one: its
-    /// `I_n` overflows there and the laws fail. That is the data's scales, not a bug of the
-    /// law (`ricochet impact` said "incoherent … I_n = inf" for this line of a fuzz run).
-    /// The other lines of that run that failed so, each law's, with their failure.
-    #[test]
-    fn a_subnormal_entry_is_beyond_the_precision_of_doubles() {
-        let pb = ImpactProblem::new(
-            ImpactMatrix::new(5e-324, 2.6074255549412655e-227, 0.7331219096757096),
-            ContactVelocity::new(-2.5636740263993447e224, 3.548460286730535e83),
-            2.4421318579176934e-258,
-            1e-300,
-        );
-        for law in Law::ALL {
-            match crate::impact::solve(law, &pb) {
-                Err(ImpactError::IllConditioned { why, .. }) => {
-                    assert!(
-                        why.starts_with("m_nn = 5e-324 is more than"),
-                        "{law}: {why}"
-                    )
-                }
-                other => panic!("{law}: {other:?}"),
-            }
-        }
-        // (W, v^A, e, μ, the laws that said "incoherent"): entries of W or v^A 2^511 to
-        // 2^1000 times smaller than the largest of their kind, all normal doubles.
-        let n = Law::Newton;
-        let (kl, s) = (Law::KaneLevinson, Law::Stronge);
-        type Case<'a> = ([Real; 3], [Real; 2], Real, Real, &'a [Law]);
-        let cases: [Case<'_>; 7] = [
-            (
-                [1e-300, 1.0912652478146486e-150, 1.2764985112186802],
-                [-1e-300, -2.836251404990221e-230],
-                1e-300,
-                0.0,
-                &[n],
-            ),
-            (
-                [
-                    2.1842429464248966e-252,
-                    -1.3856853741779596e-140,
-                    9.643760599220835e-29,
-                ],
-                [-4.568938637465665e110, 1.4187973825886904e-99],
-                0.0,
-                1e-300,
-                &[n],
-            ),
-            (
-                [3e-308, 1.543166671095174e-154, 1.1337195545293361],
-                [-3.689761663477451e95, -963064.9485314045],
-                1.0,
-                1e-12,
-                &[n, kl, s],
-            ),
-            (
-                [3e-308, 3.7e-300, 1.4151059552086736e-139],
-                [-3.517042291331083e-12, -1e-200],
-                0.0,
-                0.0,
-                &[n],
-            ),
-            (
-                [
-                    1.6061773811227796e307,
-                    2.262955760800605e153,
-                    0.49227304648181347,
-                ],
-                [-5.645823590128225e-122, -4.0866660558594084e135],
-                0.5,
-                1e300,
-                &[kl, s],
-            ),
-            // Stronge's phase-by-phase march said "restitution work never reached"; its
-            // closed form (stop 31) solves it (v_n^S = −e v_n^A, work_n = 0 at e = 1).
-            (
-                [
-                    1.027463552207789e-285,
-                    1.7213246192259076e-143,
-                    1.1481830682434242,
-                ],
-                [-1.0336514846813672e-236, -4.970568423889004e-36],
-                1.0,
-                1e-300,
-                &[],
-            ),
-            // μ m_nt ≈ 3e-396 at order one: underflows.
-            (
-                [2e-320, 2.8137707659243152e-288, 1.7013493255848718e-192],
-                [-8.956875141956504e-223, -2.068760905660855e-199],
-                0.5,
-                1e-300,
-                &[n],
-            ),
-        ];
-        for (w, v, e, mu, failed) in cases {
-            let pb = ImpactProblem::new(
-                ImpactMatrix::new(w[0], w[1], w[2]),
-                ContactVelocity::new(v[0], v[1]),
-                e,
-                mu,
-            );
-            for law in Law::ALL {
-                // The laws that solved, or failed otherwise (`OutOfRange`), still may.
-                match crate::impact::solve(law, &pb) {
-                    Err(ImpactError::IllConditioned { .. }) => {}
-                    Err(ImpactError::Incoherent { .. }) => panic!("{law} {pb:?}: incoherent"),
-                    other => assert!(!failed.contains(&law), "{law} {pb:?}: {other:?}"),
-                }
-            }
-        }
-    }
 }

@@ -11,7 +11,8 @@ use crate::math::Real;
 /// ```
 ///
 /// A step is accepted when `err ≤ 1`.
-pub(crate) fn error_norm(e: &[Real], y0: &[Real], y1: &[Real], rtol: Real, atol: Real) -> Real {
+#[doc(hidden)]
+pub fn error_norm(e: &[Real], y0: &[Real], y1: &[Real], rtol: Real, atol: Real) -> Real {
     if e.is_empty() {
         return 0.0;
     }
@@ -41,7 +42,8 @@ pub(crate) fn error_norm(e: &[Real], y0: &[Real], y1: &[Real], rtol: Real, atol:
 /// `β = 0` is the classical I (elementary) controller; `β ≈ 0.04` damps oscillating step
 /// sequences.
 #[derive(Clone, Debug)]
-pub(crate) struct PiController {
+#[doc(hidden)]
+pub struct PiController {
     pub safety: Real,
     pub beta: Real,
     pub fac_min: Real,
@@ -55,7 +57,8 @@ pub(crate) struct PiController {
 
 /// The controller's verdict on one attempted step.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Verdict {
+#[doc(hidden)]
+pub struct Verdict {
     pub accept: bool,
     /// The next step to try (s).
     pub h_new: Real,
@@ -161,7 +164,8 @@ pub(crate) fn dop853_error_norm(
 /// a step that would leave a sliver shorter than 1 % of itself is stretched to
 /// `t_stop` when that stays within `h_max` (to a relative 1e-12), otherwise the rest is
 /// split into two equal steps. Returns the step and whether it reaches `t_stop`.
-pub(crate) fn clip_step(h_try: Real, h_max: Real, remaining: Real) -> (Real, bool) {
+#[doc(hidden)]
+pub fn clip_step(h_try: Real, h_max: Real, remaining: Real) -> (Real, bool) {
     let h = h_try.min(h_max);
     if remaining <= h {
         (remaining, true)
@@ -201,48 +205,4 @@ pub(crate) fn scaled_sq(v: &[Real], y0: &[Real], rtol: Real, atol: Real) -> Real
             r * r
         })
         .sum()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn clip_lands_on_the_stop_time() {
-        assert_eq!(clip_step(0.1, 1.0, 0.05), (0.05, true));
-        assert_eq!(clip_step(0.1, 1.0, 0.3), (0.1, false));
-        // A sliver of 0.5 % is absorbed.
-        assert_eq!(clip_step(0.1, 1.0, 0.1005), (0.1005, true));
-        // ... unless that would exceed h_max: two halves instead.
-        assert_eq!(clip_step(0.1, 0.1, 0.1005), (0.05025, false));
-        // h_max caps the trial step.
-        assert_eq!(clip_step(0.5, 0.2, 1.0), (0.2, false));
-    }
-
-    #[test]
-    fn controller_grows_at_most_fac_max_and_shrinks_after_rejection() {
-        let mut c = PiController::new((0.2, 0.75), 0.9, 0.04, 0.2, 10.0);
-        let v = c.judge(1.0, 0.0);
-        assert!(v.accept);
-        assert_eq!(v.h_new, 10.0);
-        let v = c.judge(1.0, 1e6);
-        assert!(!v.accept);
-        assert_eq!(v.h_new, 0.2);
-        // After a rejection the next accepted step does not grow.
-        let v = c.judge(0.2, 1e-3);
-        assert!(v.accept);
-        assert_eq!(v.h_new, 0.2);
-        let v = c.judge(0.2, Real::NAN);
-        assert!(!v.accept);
-        assert!((v.h_new - 0.04).abs() < 1e-16);
-    }
-
-    #[test]
-    fn error_norm_is_a_weighted_rms() {
-        let e = [1e-6, -2e-6];
-        let y = [1.0, 0.0];
-        // sk = (1e-6 + 1e-6·1, 1e-6) → ratios (0.5, −2) → √((0.25 + 4)/2)
-        let n = error_norm(&e, &y, &y, 1e-6, 1e-6);
-        assert!((n - (4.25f64 / 2.0).sqrt()).abs() < 1e-12);
-    }
 }

@@ -53,7 +53,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-mod control;
+#[doc(hidden)]
+pub mod control;
 mod dense;
 mod error;
 mod rk;

@@ -559,7 +559,8 @@ pub fn conditions_violation(
 
 /// [`conditions_violation`] with its `w = A x + b` recomputed into `w` and its difference
 /// from `sol.w` into `diff` (kept buffers, resized to 2n): the same number, to the bit.
-pub(super) fn violation_in(
+#[doc(hidden)]
+pub fn violation_in(
     a: &DMatrix<Real>,
     b: &DVector<Real>,
     allowed: &[Allowed],

@@ -67,16 +67,17 @@ impl ServerListener for GeometryWanted {
 
 /// The clock of the pacing: the wall-clock instant of simulated time `t0`.
 #[derive(Clone, Copy, Debug)]
-struct Pace {
-    start: Instant,
-    t0: f64,
-    speed: f64,
+#[doc(hidden)]
+pub struct Pace {
+    pub start: Instant,
+    pub t0: f64,
+    pub speed: f64,
 }
 
 impl Pace {
     /// How long to wait at simulated time `t` (s), `now` on the wall clock: until
     /// `start + (t − t₀)/speed`; zero when behind.
-    fn wait(&self, t: f64, now: Instant) -> Duration {
+    pub fn wait(&self, t: f64, now: Instant) -> Duration {
         let due = Duration::try_from_secs_f64((t - self.t0) / self.speed).unwrap_or_default();
         (self.start + due).saturating_duration_since(now)
     }
@@ -248,48 +249,6 @@ impl Drop for LiveView {
     fn drop(&mut self) {
         if let Some(server) = self.server.take() {
             server.stop().wait_blocking();
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn pacing_waits_until_the_simulated_time_is_due() {
-        let start = Instant::now();
-        let pace = Pace {
-            start,
-            t0: 2.0,
-            speed: 4.0,
-        };
-        // t = 3 s is due 0.25 s after the start at 4× real time.
-        assert_eq!(pace.wait(3.0, start), Duration::from_millis(250));
-        assert_eq!(
-            pace.wait(3.0, start + Duration::from_millis(100)),
-            Duration::from_millis(150)
-        );
-        // Behind: no wait.
-        assert_eq!(
-            pace.wait(3.0, start + Duration::from_secs(1)),
-            Duration::ZERO
-        );
-        assert_eq!(pace.wait(2.0, start), Duration::ZERO);
-    }
-
-    #[test]
-    fn a_bad_speed_is_refused() {
-        for speed in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-            let options = LiveOptions {
-                speed,
-                port: 0,
-                ..LiveOptions::default()
-            };
-            assert!(matches!(
-                LiveView::start(&options),
-                Err(LogError::Live { .. })
-            ));
         }
     }
 }

@@ -34,15 +34,22 @@ use std::path::PathBuf;
 pub mod draw;
 pub mod foxglove;
 #[cfg(feature = "live")]
-mod live;
+#[doc(hidden)]
+pub mod live;
 mod reader;
-mod records;
-mod repair;
-mod run;
-mod samples;
+#[doc(hidden)]
+pub mod records;
+#[doc(hidden)]
+pub mod repair;
+#[doc(hidden)]
+pub mod run;
+#[doc(hidden)]
+pub mod samples;
 pub mod schemas;
-mod sink;
-mod writer;
+#[doc(hidden)]
+pub mod sink;
+#[doc(hidden)]
+pub mod writer;
 
 pub use foxglove::{FrameTransform, FrameTransforms, Log, LogLevel, SceneEntity, SceneUpdate};
 #[cfg(feature = "live")]

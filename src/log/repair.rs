@@ -16,8 +16,10 @@ use mcap::records::op;
 use super::LogError;
 
 mod copy;
-mod lz4;
-pub(super) mod scan;
+#[doc(hidden)]
+pub mod lz4;
+#[doc(hidden)]
+pub mod scan;
 
 use copy::{Copier, Survey};
 use scan::scan;

@@ -265,7 +265,6 @@ pub(super) struct Sink<W: Write + Seek + Send + 'static> {
     /// Batches the sink thread has written (it counts them).
     written: Arc<AtomicU64>,
     /// Tests: whether samples go as numbers whatever the sink thread's progress.
-    #[cfg(test)]
     pub(super) defer: Option<bool>,
     /// What [`serve`] returns, once it has returned: disconnected without it if the
     /// thread panicked.
@@ -314,7 +313,6 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
             failure,
             sent: 0,
             written,
-            #[cfg(test)]
             defer: None,
             done: Some(done),
         })
@@ -350,7 +348,6 @@ impl<W: Write + Seek + Send + 'static> Sink<W> {
     /// with no second core to spare, it thus does what it did before samples went as
     /// numbers. The bytes are the same either way.
     pub(super) fn defers_samples(&self) -> bool {
-        #[cfg(test)]
         if let Some(defer) = self.defer {
             return defer;
         }
@@ -541,13 +538,16 @@ fn new_layout<T: Clone>(
 
 /// A log's work for a log thread: it calls its argument once it is done with the log
 /// (which offers the thread to the next log) and then answers.
-type Job = Box<dyn FnOnce(&mut dyn FnMut()) + Send>;
+#[doc(hidden)]
+pub type Job = Box<dyn FnOnce(&mut dyn FnMut()) + Send>;
 
 /// Log threads that wait for a log to write, each as the sender of its jobs.
-static IDLE_LOG_THREADS: Mutex<Vec<SyncSender<Job>>> = Mutex::new(Vec::new());
+#[doc(hidden)]
+pub static IDLE_LOG_THREADS: Mutex<Vec<SyncSender<Job>>> = Mutex::new(Vec::new());
 
 /// Idle log threads kept for later logs; more end with their log.
-const IDLE_LOG_THREADS_KEPT: usize = 4;
+#[doc(hidden)]
+pub const IDLE_LOG_THREADS_KEPT: usize = 4;
 
 /// Runs `job` on an idle log thread, or on a new one (`ricochet-log`).
 ///
@@ -557,7 +557,8 @@ const IDLE_LOG_THREADS_KEPT: usize = 4;
 /// the wake-up), and each new thread took fresh memory for the log's buffers (the
 /// allocator gives a new thread an arena whose freed memory goes back to the system):
 /// ~100 page faults of a run. A thread that panics ends, and is not kept.
-fn run_on_log_thread(mut job: Job) -> Result<(), LogError> {
+#[doc(hidden)]
+pub fn run_on_log_thread(mut job: Job) -> Result<(), LogError> {
     loop {
         let idle = IDLE_LOG_THREADS.lock().ok().and_then(|mut idle| idle.pop());
         let Some(thread) = idle else { break };
@@ -604,11 +605,13 @@ fn log_thread(mut job: Job, me: &SyncSender<Job>, inbox: &Receiver<Job>) {
 const MESSAGE_RECORD: u64 = 31;
 
 /// Chunks closed at one target size before the target doubles (see [`chunk_target`]).
-pub(super) const CHUNKS_PER_SIZE: u64 = 1024;
+#[doc(hidden)]
+pub const CHUNKS_PER_SIZE: u64 = 1024;
 
 /// The largest chunk target the doubling reaches (bytes), the MCAP command line tool's
 /// default chunk size: a reader decompresses a whole chunk to reach one of its messages.
-pub(super) const MAX_CHUNK_SIZE: u64 = 4 << 20;
+#[doc(hidden)]
+pub const MAX_CHUNK_SIZE: u64 = 4 << 20;
 
 /// The target size of the messages of a chunk (before compression, bytes) after `closed`
 /// chunks of a log whose first chunks' target is `first`: `first`, doubled after every
@@ -620,7 +623,8 @@ pub(super) const MAX_CHUNK_SIZE: u64 = 4 << 20;
 /// a short run's chunks small (a killed run loses at most its open chunk; a viewer seeks
 /// by chunks) and the chunk count of a long run `1024 log2(4 MiB / first) + bytes / 4 MiB`:
 /// 6,144 + 3,600 for those 15 GB.
-pub(super) fn chunk_target(first: u64, closed: u64) -> u64 {
+#[doc(hidden)]
+pub fn chunk_target(first: u64, closed: u64) -> u64 {
     let doublings = u32::try_from(closed / CHUNKS_PER_SIZE).map_or(63, |d| d.min(63));
     (first.saturating_mul(1 << doublings)).min(first.max(MAX_CHUNK_SIZE))
 }
@@ -860,101 +864,4 @@ fn register<W: Write + Seek>(
         )?;
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_chunk_target_doubles_every_1024_chunks_up_to_4_mib() {
-        let k = 64 * 1024;
-        assert_eq!(chunk_target(k, 0), k);
-        assert_eq!(chunk_target(k, 1023), k);
-        assert_eq!(chunk_target(k, 1024), 2 * k);
-        assert_eq!(chunk_target(k, 6 * 1024 - 1), 32 * k);
-        assert_eq!(chunk_target(k, 6 * 1024), MAX_CHUNK_SIZE);
-        assert_eq!(chunk_target(k, u64::MAX), MAX_CHUNK_SIZE);
-        // A first target beyond the largest stays.
-        assert_eq!(chunk_target(8 << 20, 5000), 8 << 20);
-        assert_eq!(chunk_target(1, 1 << 40), MAX_CHUNK_SIZE);
-    }
-
-    /// The chunks (hence the chunk indexes the `mcap` writer keeps) of 15 GB of messages
-    /// in 64 KiB steps: 9,700, where a fixed 64 KiB made 229,000.
-    #[test]
-    fn a_long_log_has_few_chunks() {
-        let (first, total) = (64 * 1024u64, 15_000_000_000u64);
-        let (mut written, mut chunks) = (0, 0);
-        while written < total {
-            written += chunk_target(first, chunks);
-            chunks += 1;
-        }
-        let bound = CHUNKS_PER_SIZE * 6 + total.div_ceil(MAX_CHUNK_SIZE);
-        assert!(chunks <= bound, "{chunks} > {bound}");
-        assert!(chunks * 23 < total / first, "{chunks}");
-    }
-
-    /// A log of `n` `/log` lines in small chunks, its bytes.
-    fn small_log(n: usize) -> Vec<u8> {
-        let options = crate::log::LogOptions {
-            chunk_size: 2048,
-            ..crate::log::LogOptions::default()
-        };
-        let mut log = crate::log::LogWriter::new(std::io::Cursor::new(Vec::new()), options)
-            .expect("a log in memory");
-        for k in 0..n {
-            log.log(k as f64 * 0.01, LogLevel::Info, &format!("line {k}"))
-                .expect("a line");
-        }
-        log.finish().expect("finished").into_inner()
-    }
-
-    /// The `/log` lines of `bytes`.
-    fn lines(bytes: &[u8]) -> usize {
-        let stream = mcap::MessageStream::new(bytes).expect("an MCAP file");
-        (stream.map(|m| m.expect("a message")))
-            .filter(|m| m.channel.topic == Topic::Log.name())
-            .count()
-    }
-
-    /// Logs written one after another (on the log thread of the one before, kept) and
-    /// eight at once (more threads than are kept) hold every line, the same bytes each,
-    /// and no more idle log threads are kept than `IDLE_LOG_THREADS_KEPT`.
-    #[test]
-    fn logs_on_kept_threads_and_at_once_are_the_same_bytes() {
-        let first = small_log(300);
-        assert_eq!(lines(&first), 300);
-        for _ in 0..5 {
-            assert!(small_log(300) == first);
-        }
-        let at_once: Vec<Vec<u8>> = std::thread::scope(|scope| {
-            let logs: Vec<_> = (0..8).map(|_| scope.spawn(|| small_log(300))).collect();
-            (logs.into_iter())
-                .map(|log| log.join().expect("a log"))
-                .collect()
-        });
-        assert!(at_once.iter().all(|bytes| *bytes == first));
-        let idle = IDLE_LOG_THREADS
-            .lock()
-            .map_or(usize::MAX, |idle| idle.len());
-        assert!(
-            idle <= IDLE_LOG_THREADS_KEPT,
-            "{idle} idle log threads kept"
-        );
-    }
-
-    /// A job that panics ends its thread without answering (a sink reports it as
-    /// `SinkFailed`), and later logs are written.
-    #[test]
-    fn a_panicking_log_job_ends_its_thread_and_later_logs_are_written() {
-        let (answer, reply) = sync_channel::<()>(1);
-        let job: Job = Box::new(move |_idle: &mut dyn FnMut()| {
-            let _answer = answer;
-            panic!("a log job panics (this test expects it)");
-        });
-        run_on_log_thread(job).expect("a log thread");
-        assert!(reply.recv().is_err());
-        assert_eq!(lines(&small_log(10)), 10);
-    }
 }

@@ -334,8 +334,8 @@ impl<W: Write + Seek + Send + 'static> LogWriter<W> {
 
     /// Tests: samples as numbers (`Some(true)`), encoded here (`Some(false)`), or as the
     /// writer thread's progress decides (`None`).
-    #[cfg(test)]
-    pub(super) fn defer_samples(&mut self, defer: Option<bool>) {
+    #[doc(hidden)]
+    pub fn defer_samples(&mut self, defer: Option<bool>) {
         self.mcap.defer = defer;
     }
 

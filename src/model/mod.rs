@@ -32,7 +32,8 @@ mod collider;
 mod constraint;
 mod error;
 mod joint;
-mod pairs;
+#[doc(hidden)]
+pub mod pairs;
 pub mod spatial;
 mod speeds;
 mod validate;
@@ -62,7 +63,7 @@ pub struct ColliderId(pub(crate) usize);
 /// (`i · 2³² + j`: stable, in the order of `i`, then `j`; see [`Model::pair_between`]).
 /// The model answers for any pair on demand; it lists none.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct PairId(pub(crate) usize);
+pub struct PairId(#[doc(hidden)] pub usize);
 
 macro_rules! id_index {
     ($($t:ty),*) => {$(

@@ -37,7 +37,8 @@ pub(crate) struct PairRules {
 
 /// The id of the couple `i < j` of `n` colliders (see the [module](self) doc).
 #[inline]
-pub(crate) fn encode(n: usize, i: usize, j: usize) -> PairId {
+#[doc(hidden)]
+pub fn encode(n: usize, i: usize, j: usize) -> PairId {
     debug_assert!(i < j && j < n);
     PairId((i << 32) | j)
 }
@@ -45,7 +46,8 @@ pub(crate) fn encode(n: usize, i: usize, j: usize) -> PairId {
 /// The couple `(i, j)`, `i < j < n`, of the id `k` (the inverse of [`encode`]); `None` for
 /// an id that is not one of `n` colliders.
 #[inline]
-pub(crate) fn decode(n: usize, k: usize) -> Option<(usize, usize)> {
+#[doc(hidden)]
+pub fn decode(n: usize, k: usize) -> Option<(usize, usize)> {
     let (i, j) = (k >> 32, k & 0xFFFF_FFFF);
     (i < j && j < n).then_some((i, j))
 }
@@ -123,31 +125,5 @@ impl PairRules {
             }
         }
         count
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{decode, encode};
-
-    /// The ids of the couples of n colliders increase in the order of (i, j), and decode
-    /// back to their couple; ids of no couple decode to nothing.
-    #[test]
-    fn ids_follow_the_couples_in_order_and_decode() {
-        for n in [0, 1, 2, 3, 7, 64, 1000, 20_001] {
-            let step = if n > 1000 { 997 } else { 1 };
-            let mut last = None;
-            for i in (0..n).step_by(step) {
-                for j in (i + 1..n).step_by(step) {
-                    let id = encode(n, i, j).0;
-                    assert!(last < Some(id), "n {n}, ({i}, {j})");
-                    assert_eq!(decode(n, id), Some((i, j)), "n {n}, id {id}");
-                    last = Some(id);
-                }
-            }
-        }
-        assert_eq!(decode(5, encode(5, 1, 4).0 + 1), None, "j = n");
-        assert_eq!(decode(5, (3 << 32) | 3), None, "i = j");
-        assert_eq!(decode(5, (4 << 32) | 3), None, "i > j");
     }
 }

@@ -18,11 +18,15 @@
 
 mod collect;
 pub mod compare;
-mod drift;
+#[doc(hidden)]
+pub mod drift;
 pub mod golden;
-mod layout;
-mod overrides;
-mod summary;
+#[doc(hidden)]
+pub mod layout;
+#[doc(hidden)]
+pub mod overrides;
+#[doc(hidden)]
+pub mod summary;
 
 use std::path::{Path, PathBuf};
 

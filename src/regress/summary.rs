@@ -361,7 +361,8 @@ impl Summary {
 }
 
 /// Checks the `format` and `version` fields of a document read from `path`.
-pub(crate) fn check_format(
+#[doc(hidden)]
+pub fn check_format(
     value: &Value,
     path: &Path,
     format: &'static str,

@@ -32,9 +32,11 @@ mod chain;
 mod error;
 mod format;
 mod joint;
-mod ranges;
+#[doc(hidden)]
+pub mod ranges;
 mod shape;
-mod units;
+#[doc(hidden)]
+pub mod units;
 
 use std::path::{Path, PathBuf};
 

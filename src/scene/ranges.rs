@@ -20,7 +20,8 @@ pub(super) const FORCE_ELEMENT: Real = 1e12;
 /// A size (m): a radius, a half extent, a chain link's length and radius.
 pub(super) const SIZE: (Real, Real) = (1e-6, 1e6);
 /// A mass (kg).
-pub(super) const MASS: (Real, Real) = (1e-9, 1e9);
+#[doc(hidden)]
+pub const MASS: (Real, Real) = (1e-9, 1e9);
 /// A moment of inertia (kg·m²): `m L²` over the ranges of the mass and of the size.
 pub(super) const INERTIA: (Real, Real) = (1e-21, 1e21);
 /// The coefficient of friction `μ`.
@@ -50,12 +51,8 @@ pub(super) const NAME_LENGTH: usize = 64;
 
 /// `x` if it lies in `[lo, hi]`; else what is wrong, e.g. "the mass must be within
 /// [1e-9, 1e9] kg, got 1e-320 kg" (`unit` may be empty).
-pub(super) fn check(
-    x: Real,
-    (lo, hi): (Real, Real),
-    what: &str,
-    unit: &str,
-) -> Result<Real, String> {
+#[doc(hidden)]
+pub fn check(x: Real, (lo, hi): (Real, Real), what: &str, unit: &str) -> Result<Real, String> {
     let unit = if unit.is_empty() {
         String::new()
     } else {
@@ -93,7 +90,8 @@ pub(super) fn number(x: Real) -> String {
 /// Why `name` cannot name a scene, a body, a shape or an obstacle, if it cannot: it must
 /// be 1 to 64 printable characters (no control character: NUL, newline, tab …), without
 /// `/` (pair names are `<a>/<b>`) or `\`, and not begin or end with a space.
-pub(super) fn bad_name(name: &str) -> Option<String> {
+#[doc(hidden)]
+pub fn bad_name(name: &str) -> Option<String> {
     let count = name.chars().count();
     if count == 0 {
         Some("a name cannot be empty".into())
@@ -111,28 +109,5 @@ pub(super) fn bad_name(name: &str) -> Option<String> {
         Some("a name cannot begin or end with a space".into())
     } else {
         None
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_and_names() {
-        assert_eq!(check(1.0, MASS, "the mass", "kg"), Ok(1.0));
-        assert_eq!(
-            check(1e-320, MASS, "the mass", "kg"),
-            Err("the mass must be within [1e-9, 1e9] kg, got 1e-320 kg".into())
-        );
-        assert!(
-            check(Real::NAN, MASS, "m", "")
-                .unwrap_err()
-                .contains("finite")
-        );
-        assert_eq!(bad_name("rod B.1"), None);
-        for bad in ["", "a/b", "a\0b", "a\nb", " a", &"x".repeat(65)] {
-            assert!(bad_name(bad).is_some(), "{bad:?}");
-        }
     }
 }

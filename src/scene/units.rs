@@ -10,7 +10,8 @@ use crate::math::Real;
 
 /// A scene value that is either a plain number or a number with a unit.
 #[derive(Clone, Debug, PartialEq)]
-pub(super) enum Quantity {
+#[doc(hidden)]
+pub enum Quantity {
     /// A plain number (SI).
     Number(Real),
     /// A number followed by a unit, e.g. `"20 deg"`.
@@ -19,7 +20,8 @@ pub(super) enum Quantity {
 
 /// The units a scene file may write.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Unit {
+#[doc(hidden)]
+pub enum Unit {
     /// Radian.
     Rad,
     /// Degree.
@@ -51,7 +53,8 @@ impl Unit {
 
 /// What a field holds, to convert and check a [`Quantity`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Kind {
+#[doc(hidden)]
+pub enum Kind {
     /// A plain SI number (m, m/s, N, …).
     Plain,
     /// An angle: `rad` or `deg`.
@@ -62,7 +65,8 @@ pub(super) enum Kind {
 
 impl Quantity {
     /// The SI value of this quantity read as `kind`, or a message saying what is wrong.
-    pub(super) fn si(&self, kind: Kind) -> Result<Real, String> {
+    #[doc(hidden)]
+    pub fn si(&self, kind: Kind) -> Result<Real, String> {
         use std::f64::consts::PI;
         let value = match (kind, self) {
             (Kind::Plain, Quantity::Number(x)) => *x,
@@ -101,7 +105,8 @@ impl Quantity {
 }
 
 /// Parses `"<number> <unit>"`.
-fn parse(s: &str) -> Result<Quantity, String> {
+#[doc(hidden)]
+pub fn parse(s: &str) -> Result<Quantity, String> {
     let mut parts = s.split_whitespace();
     let (Some(number), unit, None) = (parts.next(), parts.next(), parts.next()) else {
         return Err(format!(
@@ -146,26 +151,5 @@ impl<'de> Deserialize<'de> for Quantity {
             }
         }
         d.deserialize_any(V)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn units_convert_to_si() {
-        let q = |s: &str| parse(s).unwrap();
-        assert_eq!(q("20 deg").si(Kind::Angle).unwrap(), 20f64.to_radians());
-        assert_eq!(q("-0.1 rad/s").si(Kind::AngularRate).unwrap(), -0.1);
-        assert!(
-            (q("60 rpm").si(Kind::AngularRate).unwrap() - 2.0 * std::f64::consts::PI).abs() < 1e-15
-        );
-        assert!(q("20 deg").si(Kind::AngularRate).is_err());
-        assert!(Quantity::Number(1.0).si(Kind::Angle).is_err());
-        assert!(q("1 rad").si(Kind::Plain).is_err());
-        assert!(parse("20 degs").is_err());
-        assert!(parse("twenty deg").is_err());
-        assert!(parse("20").is_err());
     }
 }

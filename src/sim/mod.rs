@@ -28,8 +28,10 @@ pub mod gaps;
 mod impact_map;
 mod moreau_jean;
 mod observer;
-mod pair_map;
-mod persistent;
+#[doc(hidden)]
+pub mod pair_map;
+#[doc(hidden)]
+pub mod persistent;
 mod summary;
 mod system;
 

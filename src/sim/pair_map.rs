@@ -12,7 +12,8 @@ use crate::model::PairId;
 #[derive(Clone, Debug, Default)]
 pub struct PairMap<T> {
     default: T,
-    map: BTreeMap<usize, T>,
+    #[doc(hidden)]
+    pub map: BTreeMap<usize, T>,
 }
 
 impl<T: Clone> PairMap<T> {
@@ -71,27 +72,5 @@ impl<T> Index<usize> for PairMap<T> {
 impl<T: Clone> IndexMut<usize> for PairMap<T> {
     fn index_mut(&mut self, k: usize) -> &mut T {
         self.map.entry(k).or_insert_with(|| self.default.clone())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::PairMap;
-    use crate::model::PairId;
-
-    #[test]
-    fn only_written_pairs_are_stored() {
-        let mut m = PairMap::new(0i8);
-        assert_eq!(m[7], 0);
-        m[7] = 1;
-        m[3] = 0;
-        m[5] = -1;
-        assert_eq!((m[7], m[5], m[3], m[4]), (1, -1, 0, 0));
-        assert_eq!(m.changed().collect::<Vec<_>>(), vec![PairId(5), PairId(7)]);
-        m.prune();
-        assert_eq!(m.map.len(), 2);
-        m.fill(2);
-        assert_eq!((m[7], m[0]), (2, 2));
-        assert_eq!(m.changed().count(), 0);
     }
 }

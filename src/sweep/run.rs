@@ -307,7 +307,8 @@ const INTERRUPTED: &str = "interrupted";
 
 /// The outcome of `run`, or a `panic` row with the panic's message if it panics (a bug:
 /// the sweep goes on with the other runs).
-fn caught(run: impl FnOnce() -> Result<RunResult, NotRun>) -> Result<RunResult, NotRun> {
+#[doc(hidden)]
+pub fn caught(run: impl FnOnce() -> Result<RunResult, NotRun>) -> Result<RunResult, NotRun> {
     catch_unwind(AssertUnwindSafe(run)).unwrap_or_else(|payload| {
         let what = payload
             .downcast_ref::<&str>()
@@ -477,32 +478,5 @@ impl Row {
             }
         }
         f
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_panic_is_a_row_with_its_message() {
-        // The panic's message goes to the hook (stderr) too; keep the test output quiet.
-        let hook = std::panic::take_hook();
-        std::panic::set_hook(Box::new(|_| {}));
-        let got = caught(|| panic!("index out of bounds: the len is 3 but the index is 7"));
-        let formatted = caught(|| panic!("{} {}", "formatted", 42));
-        std::panic::set_hook(hook);
-        assert_eq!(
-            got,
-            Err(NotRun {
-                stop: "panic",
-                detail: "the run panicked: index out of bounds: the len is 3 but the index is 7"
-                    .to_owned()
-            })
-        );
-        assert_eq!(
-            formatted.unwrap_err().detail,
-            "the run panicked: formatted 42"
-        );
     }
 }

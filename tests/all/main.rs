@@ -68,4 +68,5 @@ mod sim_two_discs;
 mod spin_drops;
 mod sweep;
 mod tree_matrix;
+mod unit;
 mod workprec;

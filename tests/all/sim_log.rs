@@ -389,9 +389,10 @@ fn assert_decodes(topic: &str, data: &[u8], validator: Option<&jsonschema::Valid
 
 /// Every bundled scene, run as the scene says: every chunk of its log holds messages,
 /// every message decodes, and at a dozen times spread over the run the latest `/geometry`
-/// message (what a viewer that seeks there shows) draws every body and every obstacle.
+/// message (what a viewer that seeks there shows) draws every body and every obstacle;
+/// and its audit balances (`sim_energy::assert_the_audit_balances`, on the same run).
 #[test]
-fn every_bundled_scene_logs_the_whole_mechanism_at_any_time() {
+fn every_bundled_scene_logs_the_whole_mechanism_and_balances_its_audit() {
     let mut scenes: Vec<String> = std::fs::read_dir(repo_path("scenes"))
         .unwrap()
         .filter_map(|e| {
@@ -405,6 +406,12 @@ fn every_bundled_scene_logs_the_whole_mechanism_at_any_time() {
     for name in &scenes {
         let run = run_scene(name);
         let model = &run.scene.model;
+        crate::sim_energy::assert_the_audit_balances(
+            name,
+            &run.scene,
+            &run.summary,
+            &run.seen.impacts,
+        );
         mcap_check::assert_every_chunk_has_messages(&run.bytes);
         let all = messages(&run.bytes);
         for (topic, _, data) in &all {

@@ -500,7 +500,8 @@ impl<'a> ChunkStart<'a> {
 
 /// A cursor over little-endian bytes: each read takes bytes off the front, `None` when
 /// too few remain.
-pub(super) struct Bytes<'a>(pub(super) &'a [u8]);
+#[doc(hidden)]
+pub struct Bytes<'a>(pub(super) &'a [u8]);
 
 impl<'a> Bytes<'a> {
     pub(super) fn take(&mut self, n: usize) -> Option<&'a [u8]> {

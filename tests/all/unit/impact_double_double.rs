@@ -1,17 +1,17 @@
-//! Double-double numbers for the tests: a value `hi + lo` with `|lo| ≤ ½ ulp(hi)`, about
+//! Double-double numbers for the tests (the laws' ulp references): a value `hi + lo` with `|lo| ≤ ½ ulp(hi)`, about
 //! 106 bits, from the error-free transformations (Knuth's two-sum, the product's error by
 //! a fused multiply-add). Reference values against which the laws' doubles are measured in
 //! ulps.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-use crate::math::Real;
+use ricochet::math::Real;
 
 /// A double-double number `hi + lo`.
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
-pub(super) struct Dd {
-    pub(super) hi: Real,
-    pub(super) lo: Real,
+pub(crate) struct Dd {
+    pub(crate) hi: Real,
+    pub(crate) lo: Real,
 }
 
 /// `a + b = s + err` exactly.
@@ -29,7 +29,7 @@ fn two_prod(a: Real, b: Real) -> (Real, Real) {
 
 impl Dd {
     /// The double `x`, exactly.
-    pub(super) fn from(x: Real) -> Self {
+    pub(crate) fn from(x: Real) -> Self {
         Self { hi: x, lo: 0.0 }
     }
 
@@ -40,7 +40,7 @@ impl Dd {
     }
 
     /// The square root, by one Newton step from the double's.
-    pub(super) fn sqrt(self) -> Self {
+    pub(crate) fn sqrt(self) -> Self {
         if self.hi <= 0.0 {
             return Self::from(0.0);
         }
@@ -50,7 +50,7 @@ impl Dd {
     }
 
     /// The nearest double.
-    pub(super) fn value(self) -> Real {
+    pub(crate) fn value(self) -> Real {
         self.hi + self.lo
     }
 }
@@ -104,7 +104,7 @@ impl Div for Dd {
 
 /// The distance from the double `x` to the reference `r`, in units of the last place of
 /// `r` (of its double value).
-pub(super) fn ulps(x: Real, r: Dd) -> Real {
+pub(crate) fn ulps(x: Real, r: Dd) -> Real {
     let v = r.value();
     let ulp = if v == 0.0 {
         Real::MIN_POSITIVE
@@ -115,20 +115,18 @@ pub(super) fn ulps(x: Real, r: Dd) -> Real {
     ((Dd::from(x) - r).value() / ulp).abs()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+// ---------------------------------------------------------------------------------------
+// Its own tests
 
-    #[test]
-    fn double_double_keeps_what_doubles_round_away() {
-        // 1/3 · 3 = 1 to ~1e-32; (1 + 2^-60) − 1 = 2^-60; √2 · √2 = 2.
-        let third = Dd::from(1.0) / Dd::from(3.0);
-        assert!(((third * Dd::from(3.0)) - Dd::from(1.0)).value().abs() < 1e-31);
-        let tiny = (Dd::from(1.0) + Dd::from(2f64.powi(-60))) - Dd::from(1.0);
-        assert_eq!(tiny.value(), 2f64.powi(-60));
-        let r2 = Dd::from(2.0).sqrt();
-        assert!(((r2 * r2) - Dd::from(2.0)).value().abs() < 1e-31);
-        assert_eq!(r2.hi, 2f64.sqrt());
-        assert_eq!(ulps(1.0 + f64::EPSILON, Dd::from(1.0)), 1.0);
-    }
+#[test]
+fn double_double_keeps_what_doubles_round_away() {
+    // 1/3 · 3 = 1 to ~1e-32; (1 + 2^-60) − 1 = 2^-60; √2 · √2 = 2.
+    let third = Dd::from(1.0) / Dd::from(3.0);
+    assert!(((third * Dd::from(3.0)) - Dd::from(1.0)).value().abs() < 1e-31);
+    let tiny = (Dd::from(1.0) + Dd::from(2f64.powi(-60))) - Dd::from(1.0);
+    assert_eq!(tiny.value(), 2f64.powi(-60));
+    let r2 = Dd::from(2.0).sqrt();
+    assert!(((r2 * r2) - Dd::from(2.0)).value().abs() < 1e-31);
+    assert_eq!(r2.hi, 2f64.sqrt());
+    assert_eq!(ulps(1.0 + f64::EPSILON, Dd::from(1.0)), 1.0);
 }
