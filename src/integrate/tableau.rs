@@ -530,87 +530,51 @@ const DOP853_D: [[Real; 16]; 4] = [
 ];
 
 /// DOPRI5 nodes `c₂ … c₆` (`c₁ = 0`, `c₇ = 1`).
-#[doc(hidden)]
-pub const C2: Real = 1.0 / 5.0;
-#[doc(hidden)]
-pub const C3: Real = 3.0 / 10.0;
-#[doc(hidden)]
-pub const C4: Real = 4.0 / 5.0;
-#[doc(hidden)]
-pub const C5: Real = 8.0 / 9.0;
+pub(crate) const C2: Real = 1.0 / 5.0;
+pub(crate) const C3: Real = 3.0 / 10.0;
+pub(crate) const C4: Real = 4.0 / 5.0;
+pub(crate) const C5: Real = 8.0 / 9.0;
 
 /// DOPRI5 coupling coefficients `a_ij`, row by row.
-#[doc(hidden)]
-pub const A21: Real = 1.0 / 5.0;
+pub(crate) const A21: Real = 1.0 / 5.0;
 
-#[doc(hidden)]
-pub const A31: Real = 3.0 / 40.0;
-#[doc(hidden)]
-pub const A32: Real = 9.0 / 40.0;
+pub(crate) const A31: Real = 3.0 / 40.0;
+pub(crate) const A32: Real = 9.0 / 40.0;
 
-#[doc(hidden)]
-pub const A41: Real = 44.0 / 45.0;
-#[doc(hidden)]
-pub const A42: Real = -56.0 / 15.0;
-#[doc(hidden)]
-pub const A43: Real = 32.0 / 9.0;
+pub(crate) const A41: Real = 44.0 / 45.0;
+pub(crate) const A42: Real = -56.0 / 15.0;
+pub(crate) const A43: Real = 32.0 / 9.0;
 
-#[doc(hidden)]
-pub const A51: Real = 19372.0 / 6561.0;
-#[doc(hidden)]
-pub const A52: Real = -25360.0 / 2187.0;
-#[doc(hidden)]
-pub const A53: Real = 64448.0 / 6561.0;
-#[doc(hidden)]
-pub const A54: Real = -212.0 / 729.0;
+pub(crate) const A51: Real = 19372.0 / 6561.0;
+pub(crate) const A52: Real = -25360.0 / 2187.0;
+pub(crate) const A53: Real = 64448.0 / 6561.0;
+pub(crate) const A54: Real = -212.0 / 729.0;
 
-#[doc(hidden)]
-pub const A61: Real = 9017.0 / 3168.0;
-#[doc(hidden)]
-pub const A62: Real = -355.0 / 33.0;
-#[doc(hidden)]
-pub const A63: Real = 46732.0 / 5247.0;
-#[doc(hidden)]
-pub const A64: Real = 49.0 / 176.0;
-#[doc(hidden)]
-pub const A65: Real = -5103.0 / 18656.0;
+pub(crate) const A61: Real = 9017.0 / 3168.0;
+pub(crate) const A62: Real = -355.0 / 33.0;
+pub(crate) const A63: Real = 46732.0 / 5247.0;
+pub(crate) const A64: Real = 49.0 / 176.0;
+pub(crate) const A65: Real = -5103.0 / 18656.0;
 
 /// Last row = 5th-order weights `b` (`b₂ = b₇ = 0`).
-#[doc(hidden)]
-pub const A71: Real = 35.0 / 384.0;
-#[doc(hidden)]
-pub const A73: Real = 500.0 / 1113.0;
-#[doc(hidden)]
-pub const A74: Real = 125.0 / 192.0;
-#[doc(hidden)]
-pub const A75: Real = -2187.0 / 6784.0;
-#[doc(hidden)]
-pub const A76: Real = 11.0 / 84.0;
+pub(crate) const A71: Real = 35.0 / 384.0;
+pub(crate) const A73: Real = 500.0 / 1113.0;
+pub(crate) const A74: Real = 125.0 / 192.0;
+pub(crate) const A75: Real = -2187.0 / 6784.0;
+pub(crate) const A76: Real = 11.0 / 84.0;
 
 /// Error weights `e = b − b̂` (`e₂ = 0`).
-#[doc(hidden)]
-pub const E1: Real = 71.0 / 57600.0;
-#[doc(hidden)]
-pub const E3: Real = -71.0 / 16695.0;
-#[doc(hidden)]
-pub const E4: Real = 71.0 / 1920.0;
-#[doc(hidden)]
-pub const E5: Real = -17253.0 / 339200.0;
-#[doc(hidden)]
-pub const E6: Real = 22.0 / 525.0;
-#[doc(hidden)]
-pub const E7: Real = -1.0 / 40.0;
+pub(crate) const E1: Real = 71.0 / 57600.0;
+pub(crate) const E3: Real = -71.0 / 16695.0;
+pub(crate) const E4: Real = 71.0 / 1920.0;
+pub(crate) const E5: Real = -17253.0 / 339200.0;
+pub(crate) const E6: Real = 22.0 / 525.0;
+pub(crate) const E7: Real = -1.0 / 40.0;
 
 /// Dense-output weights `d` of `r₅` (`d₂ = 0`).
-#[doc(hidden)]
-pub const D1: Real = -12715105075.0 / 11282082432.0;
-#[doc(hidden)]
-pub const D3: Real = 87487479700.0 / 32700410799.0;
-#[doc(hidden)]
-pub const D4: Real = -10690763975.0 / 1880347072.0;
-#[doc(hidden)]
-pub const D5: Real = 701980252875.0 / 199316789632.0;
-#[doc(hidden)]
-pub const D6: Real = -1453857185.0 / 822651844.0;
-#[doc(hidden)]
-pub const D7: Real = 69997945.0 / 29380423.0;
+pub(crate) const D1: Real = -12715105075.0 / 11282082432.0;
+pub(crate) const D3: Real = 87487479700.0 / 32700410799.0;
+pub(crate) const D4: Real = -10690763975.0 / 1880347072.0;
+pub(crate) const D5: Real = 701980252875.0 / 199316789632.0;
+pub(crate) const D6: Real = -1453857185.0 / 822651844.0;
+pub(crate) const D7: Real = 69997945.0 / 29380423.0;

@@ -161,36 +161,51 @@ fn tableaux_meet_their_order_conditions() {
     assert_order("dop853 b − ê₃", &a, &minus(e3), 3, 1e-13);
 }
 
-/// Row sums of `A` equal the nodes `c` (the stages are consistent).
+/// DOPRI5's error weights `e = b − b̂` and dense weights `d`, over `k₁ … k₇`.
+fn dopri5_e_and_d() -> (&'static [Real], &'static [Real]) {
+    let ErrorEstimate::Embedded { e } = DOPRI5.error else {
+        unreachable!()
+    };
+    let DenseOutput::Shampine { d } = DOPRI5.dense else {
+        unreachable!()
+    };
+    (e, d)
+}
+
+/// Row sums of `A` equal the nodes `c` (the stages are consistent), and the weights `b`
+/// (row 7, FSAL) sum to 1.
 #[test]
 fn row_sums_are_the_nodes() {
     let eps = 4.0 * Real::EPSILON;
-    assert!((A21 - C2).abs() <= eps);
-    assert!((A31 + A32 - C3).abs() <= eps);
-    assert!((A41 + A42 + A43 - C4).abs() <= eps);
-    assert!((A51 + A52 + A53 + A54 - C5).abs() <= 16.0 * eps);
-    assert!((A61 + A62 + A63 + A64 + A65 - 1.0).abs() <= 16.0 * eps);
-    assert!((A71 + A73 + A74 + A75 + A76 - 1.0).abs() <= eps);
+    for (i, row) in DOPRI5.a.iter().enumerate() {
+        let tol = if i < 3 { eps } else { 16.0 * eps };
+        let sum: Real = row.iter().sum();
+        assert!((sum - DOPRI5.c[i + 1]).abs() <= tol, "row {}", i + 2);
+    }
+    assert_eq!(DOPRI5.b_den, 1.0);
+    assert!((DOPRI5.b.iter().sum::<Real>() - 1.0).abs() <= eps);
 }
 
 /// The order conditions of the 5th-order weights up to order 5 along the "bushy"
 /// trees `Σ bᵢ cᵢ^(q−1) = 1/q`, and `Σ eᵢ = 0` (both weights are consistent).
 #[test]
 fn quadrature_conditions() {
-    let b = [A71, 0.0, A73, A74, A75, A76, 0.0];
-    let c = [0.0, C2, C3, C4, C5, 1.0, 1.0];
+    // Over k₁ … k₇: k₇ = f(t₁, y₁) has weight 0 in b and node 1.
+    let b: Vec<Real> = DOPRI5.b.iter().copied().chain([0.0]).collect();
+    let c: Vec<Real> = DOPRI5.c.iter().copied().chain([1.0]).collect();
+    assert_eq!((b.len(), c.len()), (7, 7));
     for q in 1..=5 {
-        let s: Real = b.iter().zip(c).map(|(b, c)| b * c.powi(q - 1)).sum();
+        let s: Real = b.iter().zip(&c).map(|(b, c)| b * c.powi(q - 1)).sum();
         assert!((s - 1.0 / q as Real).abs() < 1e-15, "q = {q}: {s}");
     }
-    let e = [E1, 0.0, E3, E4, E5, E6, E7];
+    let (e, _) = dopri5_e_and_d();
     assert!(e.iter().sum::<Real>().abs() < 1e-16);
     // b̂ = b − e integrates polynomials up to degree 3 exactly (order 4).
     for q in 1..=4 {
         let s: Real = b
             .iter()
             .zip(e)
-            .zip(c)
+            .zip(&c)
             .map(|((b, e), c)| (b - e) * c.powi(q - 1))
             .sum();
         assert!((s - 1.0 / q as Real).abs() < 1e-15, "q = {q}: {s}");
@@ -201,6 +216,7 @@ fn quadrature_conditions() {
 /// exactly linear.
 #[test]
 fn dense_weights_sum_to_zero() {
-    let s = D1 + D3 + D4 + D5 + D6 + D7;
+    let (_, d) = dopri5_e_and_d();
+    let s: Real = d.iter().sum();
     assert!(s.abs() < 1e-14, "{s}");
 }
