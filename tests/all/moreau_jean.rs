@@ -347,14 +347,7 @@ fn falling_rod_comes_to_rest_flat_with_its_audit_balanced() {
         );
         assert_eq!(w.modes, [PairMode::Sticking], "{what}");
         let a = s.audit;
-        let scale = [
-            a.initial.kinetic,
-            a.initial.potential,
-            a.end.kinetic,
-            a.end.potential,
-        ]
-        .iter()
-        .fold(0.0f64, |m, x| m.max(x.abs()));
+        let scale = crate::common::energy_scale(&a, 0.0);
         assert!(
             a.drift().abs() <= 1e-11 * scale,
             "{what}: drift {}",

@@ -110,14 +110,7 @@ pub(crate) fn assert_the_audit_balances(
         summary.stop
     );
     let a = summary.audit;
-    let scale = [
-        a.initial.kinetic,
-        a.initial.potential,
-        a.end.kinetic,
-        a.end.potential,
-    ]
-    .iter()
-    .fold(1e-3f64, |m, x| m.max(x.abs()));
+    let scale = crate::common::energy_scale(&a, 1e-3);
     println!(
         "{name}: {} at t = {:.4}; {} impacts; drift {:.2e} J ({:.1e} of the energy scale)",
         summary.stop.name(),

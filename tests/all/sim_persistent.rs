@@ -43,14 +43,7 @@ fn law_impacts(rec: &Recorder) -> Vec<&ImpactEvent> {
 /// up to the audit's ΣΔE.
 fn assert_balanced(name: &str, rec: &Recorder, summary: &RunSummary) {
     let a = summary.audit;
-    let scale = [
-        a.initial.kinetic,
-        a.initial.potential,
-        a.end.kinetic,
-        a.end.potential,
-    ]
-    .iter()
-    .fold(1e-3f64, |m, x| m.max(x.abs()));
+    let scale = crate::common::energy_scale(&a, 1e-3);
     assert!(
         a.drift().abs() <= 1e-9 * scale,
         "{name}: drift {} of {scale}",
