@@ -1,5 +1,7 @@
 //! The signed gap of a contact pair.
 
+use std::cell::RefCell;
+
 use parry2d_f64::query;
 
 use super::query as kept;
@@ -9,6 +11,13 @@ use crate::kinematics::{KinematicsError, collider_pose};
 use crate::math::{Pose, Real, Vec2};
 use crate::model::{ContactPair, Model, PairId};
 use crate::state::Data;
+
+thread_local! {
+    /// The face normals of the last penetration by support functions (`pair_contact_of`,
+    /// when the queries find the shapes overlapping), kept between calls so that the
+    /// loop allocates nothing once it has held the most (tests/all/sim_alloc.rs).
+    static KEPT_NORMALS: RefCell<Vec<Vec2>> = const { RefCell::new(Vec::new()) };
+}
 
 /// A gap that cannot be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -265,10 +274,18 @@ fn closest_points_fallback(
         }
         query::ClosestPoints::Intersecting => {
             if let (Some(sa), Some(sb)) = (ca.shape.as_support_map(), cb.shape.as_support_map()) {
-                let mut normals = Vec::new();
-                super::penetration::face_normals(&*ca.shape.0, pose_a, &mut normals);
-                super::penetration::face_normals(&*cb.shape.0, pose_b, &mut normals);
-                let mut c = super::penetration::penetration(pose_a, sa, pose_b, sb, &normals);
+                let mut c = KEPT_NORMALS.with(|kept| {
+                    // The thread's kept buffer (a fresh one if it were ever nested).
+                    let (mut fresh, mut borrowed) = (Vec::new(), kept.try_borrow_mut());
+                    let normals = match &mut borrowed {
+                        Ok(v) => &mut **v,
+                        Err(_) => &mut fresh,
+                    };
+                    normals.clear();
+                    super::penetration::face_normals(&*ca.shape.0, pose_a, normals);
+                    super::penetration::face_normals(&*cb.shape.0, pose_b, normals);
+                    super::penetration::penetration(pose_a, sa, pose_b, sb, normals)
+                });
                 // The support points along the minimizing direction need not touch: a
                 // segment crossing the thin end face of a box has its far end deepest
                 // along that face's normal (drop 7509 of tests/all/spin_drops.rs: the witness

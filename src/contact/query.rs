@@ -19,8 +19,48 @@ use parry2d_f64::query::{Contact, DefaultQueryDispatcher, QueryDispatcher, Unsup
 use parry2d_f64::shape::{HalfSpace, Shape, SupportMap};
 
 thread_local! {
-    /// The EPA of this thread's queries (see the module doc).
-    static KEPT_EPA: RefCell<EPA> = RefCell::new(EPA::new());
+    /// The EPA of this thread's queries (see the module doc), grown at its creation.
+    static KEPT_EPA: RefCell<EPA> = RefCell::new(grown_epa());
+}
+
+/// An EPA whose buffers already hold the most any query can put in them, so that no later
+/// query grows them inside the loop (a kept buffer grows the first time a problem needs
+/// more: the 8-link chain met its largest polytope after a second of motion). parry's EPA
+/// stops after 101 expansions (`epa2.rs`, `niter > 100`), each adding one vertex, two faces
+/// and at most two entries of its heap, unless it converges first; it is taken there once,
+/// on a disc whose support points move outwards at every call ([`Swelling`]), on which no
+/// expansion converges (103 evaluations of its support function: the two of GJK's start,
+/// then one per expansion; the test `the_kept_epa_never_grows`).
+fn grown_epa() -> EPA {
+    let mut epa = EPA::new();
+    let (disc, point) = (
+        Swelling(std::cell::Cell::new(1.0)),
+        parry2d_f64::shape::Ball::new(0.0),
+    );
+    let pos12 = Pose::IDENTITY;
+    let mut simplex = VoronoiSimplex::new();
+    simplex.reset(CsoPoint::from_shapes(&pos12, &disc, &point, Vector::X));
+    if gjk::closest_points(&pos12, &disc, &point, 0.0, true, &mut simplex)
+        == GJKResult::Intersection
+    {
+        let _ = epa.closest_points(&pos12, &disc, &point, &simplex);
+    }
+    epa
+}
+
+/// A unit disc about the origin whose radius grows by one part in 10¹² at every evaluation
+/// of its support function. In the EPA of [`grown_epa`] no support point is ever nearer
+/// than the best so far (parry's test of a stalled expansion) and the faces of ~100
+/// points on a circle stay a sagitta (~5e-4) below the best (its test of convergence),
+/// so it runs to its last expansion.
+struct Swelling(std::cell::Cell<Real>);
+
+impl SupportMap for Swelling {
+    fn local_support_point(&self, dir: Vector) -> Vector {
+        let r = self.0.get();
+        self.0.set(r * (1.0 + 1e-12));
+        dir.try_normalize().unwrap_or(Vector::X) * r
+    }
 }
 
 /// `parry2d_f64::query::contact(pos1, g1, pos2, g2, prediction)`, the same numbers, with

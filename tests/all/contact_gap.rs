@@ -279,3 +279,67 @@ fn the_query_with_a_kept_epa_is_parrys_bit_for_bit() {
     }
     assert!(penetrating > 2_000, "{penetrating} penetrating cases");
 }
+
+/// The kept EPA never grows (`contact::query`'s `grown_epa`): after the thread's first
+/// query, 5,000 deep overlaps of support-mapped pairs — capsules and a 200-gon, whose round
+/// Minkowski differences run parry's EPA to its last expansion, boxes, a convex polygon,
+/// segments — allocate nothing. (With an EPA built empty, as before stop 39, they allocate:
+/// the buffers grow the first time a problem needs more.)
+#[test]
+fn the_kept_epa_never_grows() {
+    use crate::common::alloc::allocations_in;
+    use ricochet::contact::query::contact as kept;
+    let mut rng = crate::common::rng::Rng(0x2545_f491_4f6c_dd1d);
+    let gon: Vec<Vector> = (0..200)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 200.0;
+            Vector::new(0.4 * a.cos(), 0.4 * a.sin())
+        })
+        .collect();
+    let shapes = [
+        SharedShape::capsule(Vector::new(-0.4, 0.0), Vector::new(0.4, 0.0), 0.1),
+        SharedShape::capsule(Vector::new(-0.1, 0.0), Vector::new(0.1, 0.0), 0.3),
+        SharedShape::convex_polyline(gon).unwrap(),
+        SharedShape::cuboid(0.5, 0.2),
+        SharedShape::convex_polyline(vec![
+            Vector::new(0.0, 0.0),
+            Vector::new(0.6, 0.1),
+            Vector::new(0.4, 0.5),
+            Vector::new(-0.1, 0.3),
+        ])
+        .unwrap(),
+        SharedShape::segment(Vector::new(-0.5, 0.0), Vector::new(0.5, 0.1)),
+    ];
+    // The thread's first query builds its EPA.
+    let at = Pose::new(Vec2::new(0.05, 0.02), 0.3);
+    assert!(
+        kept(
+            &Pose::IDENTITY,
+            &*shapes[0].0,
+            &at,
+            &*shapes[1].0,
+            Real::INFINITY
+        )
+        .is_ok()
+    );
+    let mut penetrating = 0;
+    let allocated = allocations_in(|| {
+        for _ in 0..5_000 {
+            let (i, j) = (rng.pick(shapes.len()), rng.pick(shapes.len()));
+            let pose = |rng: &mut crate::common::rng::Rng| {
+                Pose::new(
+                    Vec2::new(rng.range(-0.15, 0.15), rng.range(-0.15, 0.15)),
+                    rng.range(-3.2, 3.2),
+                )
+            };
+            let (p1, p2) = (pose(&mut rng), pose(&mut rng));
+            if let Ok(Some(c)) = kept(&p1, &*shapes[i].0, &p2, &*shapes[j].0, Real::INFINITY)
+                && c.dist < 0.0
+            {
+                penetrating += 1;
+            }
+        }
+    });
+    assert!(penetrating > 3_000, "{penetrating} penetrating cases");
+    assert_eq!(allocated, 0, "the kept EPA grew: {allocated} allocations");
+}
