@@ -130,6 +130,7 @@ impl Simulation<'_> {
         event: Option<&Event>,
         observer: &mut dyn Observer,
     ) -> Result<Option<StopReason>, SimError> {
+        self.contact_stages += 1;
         let t = self.stepper.t();
         self.flush_passages(t, observer)?;
         let mut y = std::mem::take(&mut self.y);

@@ -159,6 +159,8 @@ pub struct Simulation<'m> {
     next_output: u64,
     audit: EnergyAudit,
     counters: RunCounters,
+    /// Runs of the contact stage in this run ([`Sample::contact_stages`]).
+    contact_stages: u64,
     /// Time of the last sample reported (s).
     last_sample_t: Option<Real>,
     /// The stepper's largest step as built (s), for each run's start (`cap_for_spin`
@@ -234,6 +236,7 @@ impl<'m> Simulation<'m> {
             next_output: 0,
             audit: EnergyAudit::default(),
             counters: RunCounters::default(),
+            contact_stages: 0,
             last_sample_t: None,
             h_max,
             stepper_counters: Default::default(),
@@ -429,6 +432,7 @@ impl<'m> Simulation<'m> {
         self.lift_offs.1.clear();
         self.audit = EnergyAudit::default();
         self.counters = RunCounters::default();
+        self.contact_stages = 0;
         self.last_sample_t = None;
         self.stepper_counters = self.stepper.counters();
     }
@@ -920,6 +924,7 @@ impl<'m> Simulation<'m> {
             at_impact,
             modes: &self.listed_modes,
             slips: &self.listed_slips,
+            contact_stages: self.contact_stages,
         };
         observer.sample(self.model, &sample).map_err(|e| e.at(t))?;
         self.counters.samples += 1;

@@ -33,6 +33,12 @@ pub struct Sample<'a> {
     /// The direction of the slip of each listed pair along its tangent `t = perp(n)`
     /// (`n` from `b` to `a`): `+1` or `−1` when it slides, `0` otherwise.
     pub slips: &'a [i8],
+    /// How many times the contact stage has run since the run began: at the start, at every
+    /// located event (those that change nothing too: a gap crossing at rounding after an
+    /// impact, a touching point that stays open) and wherever the closed points' modes stop
+    /// being consistent. Two samples with the same count have nothing but integration
+    /// between them. Always 0 under Moreau–Jean (time-stepping: no contact stage).
+    pub contact_stages: u64,
 }
 
 /// The mode of a contact pair: open, or closed and sticking or sliding (a pair with two

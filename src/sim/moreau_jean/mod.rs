@@ -830,6 +830,7 @@ impl<'m> MoreauJean<'m> {
             at_impact: false,
             modes: &self.listed_modes,
             slips: &self.listed_slips,
+            contact_stages: 0,
         };
         observer
             .sample(self.model, &sample)

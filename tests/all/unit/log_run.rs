@@ -81,6 +81,7 @@ fn non_finite_poses_meet_the_same_outcome_either_way() {
                     at_impact: false,
                     modes: &[],
                     slips: &[],
+                    contact_stages: 0,
                 };
                 match log.sample(&s.model, &sample) {
                     Ok(()) => "ok".to_owned(),
