@@ -6,7 +6,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{Allowed, CHECK_TOL, Mode, Solution, Solutions, TOL};
-use crate::linalg::{MinNorm, amax, fit_matrix, fit_vector, min_norm_2x2};
+use crate::linalg::{MinNorm, amax, fit_matrix, fit_vector};
 use crate::math::Real;
 
 /// Solves the contact problem `w = A x + b` with the allowed modes, by enumeration.
@@ -346,10 +346,21 @@ impl ModeSystem {
     }
 
     /// [`Self::solve`] with a reference of one contact point (a `2 × 2` system, the
-    /// equations of [`ModeSystem`]) on the stack: the same operations in the same order,
-    /// so the same numbers to the bit (the test
-    /// `one_point_is_the_general_path_to_the_bit`), without the buffers of the general
-    /// path. `Some(true)` with `self.x`, `self.w` written when the equations hold,
+    /// equations of [`ModeSystem`]) on the stack, without the buffers of the general path:
+    /// the change `δ` from the reference solved by Cramer's rule,
+    ///
+    /// ```text
+    ///   δ = [l₁₁ c₀ − l₀₁ c₁,  l₀₀ c₁ − l₁₀ c₀] / det,   det = l₀₀ l₁₁ − l₀₁ l₁₀
+    /// ```
+    ///
+    /// (`L` the mode's rows, `c = r − L x_ref`), where the general path takes the pivoted
+    /// Householder QR: the same solution to the rounding the system's condition number
+    /// amplifies (the test `one_point_agrees_with_the_general_path`), with one division
+    /// where the QR chains four square roots and four divisions (issue 16: the one sliding
+    /// point's right-hand side 416 → 337 ns). The rank test is the QR's, `|r₁₁| ≤ 10⁻¹⁰ |r₀₀|`
+    /// with `|r₀₀|` the larger column norm and `|r₀₀ r₁₁| = |det|`, i.e.
+    /// `|det| ≤ 10⁻¹⁰ max_j ‖L e_j‖²`. `Some(true)` with `self.x`, `self.w` written when the
+    /// equations hold,
     /// `Some(false)` when they cannot (the general path would fail too), `None`, with
     /// nothing written, when the system is rank-deficient or not finite: the general path
     /// then solves.
@@ -393,8 +404,18 @@ impl ModeSystem {
         let x_ref = [reference[0], reference[1]];
         let at_ref = mul(&lhs, x_ref);
         let change = [rhs[0] - at_ref[0], rhs[1] - at_ref[1]];
-        let by_columns = [[lhs[0][0], lhs[1][0]], [lhs[0][1], lhs[1][1]]];
-        let delta = min_norm_2x2(by_columns, change, REFERENCE_RANK_TOL)?;
+        // Cramer's rule, with the QR's rank test: |det| = |r₀₀ r₁₁| against the larger
+        // column norm |r₀₀|, squared.
+        let [[l00, l01], [l10, l11]] = lhs;
+        let det = l00 * l11 - l01 * l10;
+        let norm2 = (l00 * l00 + l10 * l10).max(l01 * l01 + l11 * l11);
+        if !(det.abs() > REFERENCE_RANK_TOL * norm2) {
+            return None;
+        }
+        let delta = [
+            (l11 * change[0] - l01 * change[1]) / det,
+            (l00 * change[1] - l10 * change[0]) / det,
+        ];
         let x = [delta[0] + x_ref[0], delta[1] + x_ref[1]];
         // `holds_to`: the residual within `CHECK_TOL` of the scales, the tolerance the
         // general path holds a reference's modes to (see `Self::solve`), the forces'
