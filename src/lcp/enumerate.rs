@@ -332,9 +332,9 @@ impl ModeSystem {
         reference: &[Real],
     ) -> Option<(&DVector<Real>, &DVector<Real>)> {
         if let [mode] = modes
-            && let Some(solved) = self.solve_one(a, b, mu[0], *mode, reference)
+            && self.solve_one(a, b, mu[0], *mode, reference)
         {
-            return solved.then_some((&self.x, &self.w));
+            return Some((&self.x, &self.w));
         }
         // nalgebra's `amax` to the bit (`linalg::amax`), on the storage.
         let scales = (
@@ -359,11 +359,12 @@ impl ModeSystem {
     /// where the QR chains four square roots and four divisions (issue 16: the one sliding
     /// point's right-hand side 416 → 337 ns). The rank test is the QR's, `|r₁₁| ≤ 10⁻¹⁰ |r₀₀|`
     /// with `|r₀₀|` the larger column norm and `|r₀₀ r₁₁| = |det|`, i.e.
-    /// `|det| ≤ 10⁻¹⁰ max_j ‖L e_j‖²`. `Some(true)` with `self.x`, `self.w` written when the
-    /// equations hold,
-    /// `Some(false)` when they cannot (the general path would fail too), `None`, with
-    /// nothing written, when the system is rank-deficient or not finite: the general path
-    /// then solves.
+    /// `|det| ≤ 10⁻¹⁰ max_j ‖L e_j‖²`. `true` with `self.x`, `self.w` written when the equations
+    /// hold; `false`, with nothing written, when the system is rank-deficient or not finite,
+    /// or when its solution does not meet the equations to `CHECK_TOL`: the general path
+    /// then decides (at extreme scales the two paths' roundings can fall on either side of
+    /// that tolerance, and a failure of the right-hand side must be the general path's,
+    /// which the selections use).
     #[doc(hidden)]
     #[inline]
     pub fn solve_one(
@@ -373,16 +374,16 @@ impl ModeSystem {
         mu: Real,
         mode: Mode,
         reference: &[Real],
-    ) -> Option<bool> {
+    ) -> bool {
         if a.shape() != (2, 2) || b.len() != 2 || reference.len() != 2 {
-            return None;
+            return false;
         }
         // Column-major storage: `a[(i, j)]` is `s[i + 2 j]`.
         let (s, b, r) = (a.as_slice(), b.as_slice(), reference);
         let (a, b) = ([[s[0], s[2]], [s[1], s[3]]], [b[0], b[1]]);
         let finite = [s[0], s[1], s[2], s[3], b[0], b[1], r[0], r[1]];
         if !finite.iter().fold(true, |all, v| all & v.is_finite()) {
-            return None;
+            return false;
         }
         // The scales of `forces_near` (nalgebra's `amax` of `A` and `b`, `linalg::amax`).
         let scale_a = amax(&[s[0], s[1], s[2], s[3]]).max(Real::MIN_POSITIVE);
@@ -409,8 +410,10 @@ impl ModeSystem {
         let [[l00, l01], [l10, l11]] = lhs;
         let det = l00 * l11 - l01 * l10;
         let norm2 = (l00 * l00 + l10 * l10).max(l01 * l01 + l11 * l11);
-        if !(det.abs() > REFERENCE_RANK_TOL * norm2) {
-            return None;
+        // Written so that a NaN (an overflow of the products) fails it too.
+        let full_rank = det.abs() > REFERENCE_RANK_TOL * norm2;
+        if !full_rank {
+            return false;
         }
         let delta = [
             (l11 * change[0] - l01 * change[1]) / det,
@@ -426,7 +429,7 @@ impl ModeSystem {
         let x_max = (x[0].abs().max(x[1].abs())).max(x_ref[0].abs().max(x_ref[1].abs()));
         let tol = CHECK_TOL * (scale_b + scale_a * x_max).max(Real::MIN_POSITIVE);
         if !(x.iter().all(|v| v.is_finite()) && residual <= tol) {
-            return Some(false);
+            return false;
         }
         let ax = mul(&a, x);
         fit_vector(&mut self.x, 2);
@@ -435,7 +438,7 @@ impl ModeSystem {
             self.x[i] = x[i];
             self.w[i] = ax[i] + b[i];
         }
-        Some(true)
+        true
     }
 
     /// [`forces`] without allocating once the workspace has met the size: the forces `x`

@@ -22,8 +22,10 @@ fn condition(m: [[Real; 2]; 2]) -> Real {
 /// rule) against the general path (the pivoted Householder QR), a second determination,
 /// on 40,000 random systems `A = Yᵀ Y` (of rank 2, and of rank 1: the general path's
 /// fallback), with every mode, references at zero, at random and near the solution, over
-/// 12 decades of scale: the same verdict, and the same forces to the rounding the mode's
-/// system amplifies, `|Δx| ≤ 8 κ ε max(‖x‖∞, ‖x_ref‖∞)` (`κ` its condition number; the
+/// 12 decades of scale: what it solves the general path solves too (it declines, to the
+/// general path, the systems of rank 1 and those whose solution misses the equations'
+/// tolerance: of the 38,572 the general path solves it takes 38,571), with the same forces to
+/// the rounding the mode's system amplifies, `|Δx| ≤ 8 κ ε max(‖x‖∞, ‖x_ref‖∞)` (`κ` its condition number; the
 /// reference's scale enters through `x = x_ref + δ`), and `w = A x + b` to that change
 /// times `‖A‖` plus its own rounding; `forces_near` gives the one-point path's numbers. And a
 /// sliding point's forces are the closed form of its equations,
@@ -58,15 +60,16 @@ fn one_point_agrees_with_the_general_path() {
             },
         };
         let scales = (a.amax().max(Real::MIN_POSITIVE), b.amax());
-        let Some(ok) = fast.solve_one(&a, &b, mu, mode, &reference) else {
-            continue;
-        };
-        taken += 1;
+        let ok = fast.solve_one(&a, &b, mu, mode, &reference);
         let expected = general.solve(&a, &b, |_| mu, &[mode], scales, Some(&reference));
-        assert_eq!(ok, expected.is_some(), "case {case}: {a} {b} {mode:?}");
+        if expected.is_some() {
+            taken += 1;
+        }
         if !ok {
             continue;
         }
+        // What the one-point path solves, the general path solves.
+        assert!(expected.is_some(), "case {case}: {a} {b} {mode:?}");
         solved += 1;
         let lhs = match mode {
             Mode::Open => [[1.0, 0.0], [0.0, 1.0]],
@@ -112,6 +115,7 @@ fn one_point_agrees_with_the_general_path() {
             }
         }
     }
+    println!("the general path solved {taken} systems, the one-point path {solved} of them");
     assert!(
         taken > 30_000 && solved > 20_000,
         "{taken} taken, {solved} solved"
