@@ -227,6 +227,25 @@ fn gaps_against_every_obstacle_shape() {
     }
 }
 
+/// The convex quadrilateral of the query tests.
+fn quadrilateral() -> SharedShape {
+    SharedShape::convex_polyline(vec![
+        Vector::new(0.0, 0.0),
+        Vector::new(0.6, 0.1),
+        Vector::new(0.4, 0.5),
+        Vector::new(-0.1, 0.3),
+    ])
+    .unwrap()
+}
+
+/// A pose with its origin uniform in the square of half-side `half` and any angle.
+fn random_pose(rng: &mut crate::common::rng::Rng, half: Real) -> Pose {
+    Pose::new(
+        Vec2::new(rng.range(-half, half), rng.range(-half, half)),
+        rng.range(-3.2, 3.2),
+    )
+}
+
 /// `ricochet::contact::query::contact` (parry's query with its EPA kept between calls: no
 /// allocation in the loop, issue 16) gives parry's `query::contact` bit for bit: 20,000
 /// random placements of every pair of shape kinds the scenes use (balls, capsules, boxes,
@@ -241,26 +260,14 @@ fn the_query_with_a_kept_epa_is_parrys_bit_for_bit() {
         SharedShape::ball(0.3),
         SharedShape::capsule(Vector::new(-0.4, 0.0), Vector::new(0.4, 0.0), 0.1),
         SharedShape::cuboid(0.5, 0.2),
-        SharedShape::convex_polyline(vec![
-            Vector::new(0.0, 0.0),
-            Vector::new(0.6, 0.1),
-            Vector::new(0.4, 0.5),
-            Vector::new(-0.1, 0.3),
-        ])
-        .unwrap(),
+        quadrilateral(),
         SharedShape::segment(Vector::new(-0.5, 0.0), Vector::new(0.5, 0.1)),
         SharedShape::halfspace(Vector::Y),
     ];
     let mut penetrating = 0;
     for case in 0..20_000 {
         let (i, j) = (rng.pick(shapes.len()), rng.pick(shapes.len()));
-        let pose = |rng: &mut crate::common::rng::Rng| {
-            Pose::new(
-                Vec2::new(rng.range(-0.6, 0.6), rng.range(-0.6, 0.6)),
-                rng.range(-3.2, 3.2),
-            )
-        };
-        let (p1, p2) = (pose(&mut rng), pose(&mut rng));
+        let (p1, p2) = (random_pose(&mut rng, 0.6), random_pose(&mut rng, 0.6));
         let prediction = if case % 3 == 0 { 0.05 } else { Real::INFINITY };
         let ours = kept(&p1, &*shapes[i].0, &p2, &*shapes[j].0, prediction);
         let parry = query::contact(&p1, &*shapes[i].0, &p2, &*shapes[j].0, prediction);
@@ -301,13 +308,7 @@ fn the_kept_epa_never_grows() {
         SharedShape::capsule(Vector::new(-0.1, 0.0), Vector::new(0.1, 0.0), 0.3),
         SharedShape::convex_polyline(gon).unwrap(),
         SharedShape::cuboid(0.5, 0.2),
-        SharedShape::convex_polyline(vec![
-            Vector::new(0.0, 0.0),
-            Vector::new(0.6, 0.1),
-            Vector::new(0.4, 0.5),
-            Vector::new(-0.1, 0.3),
-        ])
-        .unwrap(),
+        quadrilateral(),
         SharedShape::segment(Vector::new(-0.5, 0.0), Vector::new(0.5, 0.1)),
     ];
     // The thread's first query builds its EPA.
@@ -326,13 +327,7 @@ fn the_kept_epa_never_grows() {
     let allocated = allocations_in(|| {
         for _ in 0..5_000 {
             let (i, j) = (rng.pick(shapes.len()), rng.pick(shapes.len()));
-            let pose = |rng: &mut crate::common::rng::Rng| {
-                Pose::new(
-                    Vec2::new(rng.range(-0.15, 0.15), rng.range(-0.15, 0.15)),
-                    rng.range(-3.2, 3.2),
-                )
-            };
-            let (p1, p2) = (pose(&mut rng), pose(&mut rng));
+            let (p1, p2) = (random_pose(&mut rng, 0.15), random_pose(&mut rng, 0.15));
             if let Ok(Some(c)) = kept(&p1, &*shapes[i].0, &p2, &*shapes[j].0, Real::INFINITY)
                 && c.dist < 0.0
             {
