@@ -274,13 +274,7 @@ fn closest_points_fallback(
         }
         query::ClosestPoints::Intersecting => {
             if let (Some(sa), Some(sb)) = (ca.shape.as_support_map(), cb.shape.as_support_map()) {
-                let mut c = KEPT_NORMALS.with(|kept| {
-                    // The thread's kept buffer (a fresh one if it were ever nested).
-                    let (mut fresh, mut borrowed) = (Vec::new(), kept.try_borrow_mut());
-                    let normals = match &mut borrowed {
-                        Ok(v) => &mut **v,
-                        Err(_) => &mut fresh,
-                    };
+                let mut c = kept::with_kept(&KEPT_NORMALS, Vec::new, |normals| {
                     normals.clear();
                     super::penetration::face_normals(&*ca.shape.0, pose_a, normals);
                     super::penetration::face_normals(&*cb.shape.0, pose_b, normals);

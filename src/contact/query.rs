@@ -10,7 +10,8 @@
 //! own code path, in parry's order of dispatch (`DefaultQueryDispatcher::contact`), so the
 //! results are parry's bit for bit.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
+use std::thread::LocalKey;
 
 use parry2d_f64::math::{Pose, Real, Vector};
 use parry2d_f64::query::epa::EPA;
@@ -23,6 +24,20 @@ thread_local! {
     static KEPT_EPA: RefCell<EPA> = RefCell::new(grown_epa());
 }
 
+/// `f` on this thread's kept value of `kept` (a buffer that keeps its capacity between
+/// calls), or on a `fresh` one if the kept one is borrowed already (never nested in
+/// practice: a fallback, not an error).
+pub(crate) fn with_kept<T, R>(
+    kept: &'static LocalKey<RefCell<T>>,
+    fresh: impl FnOnce() -> T,
+    f: impl FnOnce(&mut T) -> R,
+) -> R {
+    kept.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut value) => f(&mut value),
+        Err(_) => f(&mut fresh()),
+    })
+}
+
 /// An EPA whose buffers already hold the most any query can put in them, so that no later
 /// query grows them inside the loop (a kept buffer grows the first time a problem needs
 /// more: the 8-link chain met its largest polytope after a second of motion). parry's EPA
@@ -33,10 +48,7 @@ thread_local! {
 /// then one per expansion; the test `the_kept_epa_never_grows`).
 fn grown_epa() -> EPA {
     let mut epa = EPA::new();
-    let (disc, point) = (
-        Swelling(std::cell::Cell::new(1.0)),
-        parry2d_f64::shape::Ball::new(0.0),
-    );
+    let (disc, point) = (Swelling(Cell::new(1.0)), parry2d_f64::shape::Ball::new(0.0));
     let pos12 = Pose::IDENTITY;
     let mut simplex = VoronoiSimplex::new();
     simplex.reset(CsoPoint::from_shapes(&pos12, &disc, &point, Vector::X));
@@ -53,7 +65,7 @@ fn grown_epa() -> EPA {
 /// than the best so far (parry's test of a stalled expansion) and the faces of ~100
 /// points on a circle stay a sagitta (~5e-4) below the best (its test of convergence),
 /// so it runs to its last expansion.
-struct Swelling(std::cell::Cell<Real>);
+struct Swelling(Cell<Real>);
 
 impl SupportMap for Swelling {
     fn local_support_point(&self, dir: Vector) -> Vector {
@@ -115,15 +127,12 @@ fn contact_support_maps(
     simplex.reset(CsoPoint::from_shapes(pos12, g1, g2, dir));
     let mut cpts = gjk::closest_points(pos12, g1, g2, prediction, true, simplex);
     if cpts == GJKResult::Intersection {
-        cpts = KEPT_EPA
-            .with(|epa| match epa.try_borrow_mut() {
-                Ok(mut epa) => epa.closest_points(pos12, g1, g2, simplex),
-                // Never nested; a fresh one if it were.
-                Err(_) => EPA::new().closest_points(pos12, g1, g2, simplex),
-            })
-            .map_or(GJKResult::NoIntersection(Vector::X), |(p1, p2, n)| {
-                GJKResult::ClosestPoints(p1, p2, n)
-            });
+        cpts = with_kept(&KEPT_EPA, EPA::new, |epa| {
+            epa.closest_points(pos12, g1, g2, simplex)
+        })
+        .map_or(GJKResult::NoIntersection(Vector::X), |(p1, p2, n)| {
+            GJKResult::ClosestPoints(p1, p2, n)
+        });
     }
     match cpts {
         GJKResult::ClosestPoints(point1, point2_1, normal1) => {
